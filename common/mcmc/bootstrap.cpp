@@ -1,0 +1,100 @@
+#include "common/mcmc/bootstrap.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+
+#include "common/mcmc/primary_sample_sampler.h"
+#include "common/transport/bidirectional.h"
+
+namespace farm {
+
+namespace {
+constexpr uint64_t kCandidateDomain = 0xb007;
+constexpr uint64_t kResampleDomain = 0x5eed;
+}  // namespace
+
+double evaluateCandidate(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
+                         std::vector<float>* primarySamples) {
+  thread_local std::vector<Splat> splats;
+  splats.clear();
+  Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
+  RecordingSampler recorder(&rng);
+  BidirectionalTracer tracer(scene, maxDepth);
+  const Camera& camera = scene.camera();
+  Vec2f film(recorder.next(kCameraStream) * camera.width(),
+             recorder.next(kCameraStream) * camera.height());
+  tracer.sample(film, recorder, &splats);
+  double sum = 0;
+  for (const Splat& s : splats) {
+    if (isValidRadiance(s.value)) sum += luminance(s.value);
+  }
+  if (primarySamples) *primarySamples = recorder.values();
+  return sum;
+}
+
+BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_t seed,
+                                       int64_t count, const std::function<bool(double)>& progress) {
+  BootstrapCandidates out;
+  out.contributions.assign(size_t(count), 0.0);
+  std::atomic<int64_t> done{0};
+  std::atomic<bool> cancelled{false};
+  const int64_t grain = 1024;
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, count, grain),
+                    [&](const tbb::blocked_range<int64_t>& r) {
+                      if (cancelled.load()) return;
+                      for (int64_t i = r.begin(); i < r.end(); ++i) {
+                        out.contributions[size_t(i)] = evaluateCandidate(scene, maxDepth, seed, i);
+                      }
+                      done += r.size();
+                    });
+  // Progress is reported from the calling thread between parallel rounds would complicate the
+  // loop; a single report at the end keeps the bootstrap deterministic and simple.
+  if (progress && !progress(1.0)) {
+    cancelled = true;
+    return BootstrapCandidates();
+  }
+  // Mean and standard error in double, summed in index order: the same on every host.
+  double sum = 0, sumSq = 0;
+  for (double c : out.contributions) {
+    sum += c;
+    sumSq += c * c;
+    if (c > 0) ++out.nonZero;
+  }
+  const double n = double(count);
+  out.mean = sum / n;
+  double variance = count > 1 ? std::max(0.0, (sumSq - n * out.mean * out.mean) / (n - 1)) : 0;
+  out.stdError = std::sqrt(variance / n);
+  return out;
+}
+
+std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n,
+                                   uint64_t seed) {
+  std::vector<int64_t> picks;
+  double total = 0;
+  for (double c : contributions) total += c;
+  if (!(total > 0) || n <= 0) return picks;
+  Rng rng(seed, streamId(kResampleDomain, 0));
+  const double step = total / n;
+  double target = rng.nextDouble() * step;
+  double running = 0;
+  size_t i = 0;
+  for (int k = 0; k < n; ++k) {
+    while (i + 1 < contributions.size() && running + contributions[i] <= target) {
+      running += contributions[i];
+      ++i;
+    }
+    // never pick a zero-contribution candidate
+    while (contributions[i] <= 0 && i + 1 < contributions.size()) {
+      running += contributions[i];
+      ++i;
+    }
+    picks.push_back(int64_t(i));
+    target += step;
+  }
+  return picks;
+}
+
+}  // namespace farm

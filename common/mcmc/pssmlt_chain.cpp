@@ -1,0 +1,123 @@
+#include "common/mcmc/pssmlt_chain.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/film/splat_buffer.h"
+#include "common/mcmc/primary_sample_sampler.h"
+#include "common/transport/bidirectional.h"
+
+namespace farm {
+
+namespace {
+
+constexpr uint64_t kChainDomain = 0xc4a1;
+
+// Builds the path the sampler's vector describes; returns I (total luminance) and drops
+// splats that are not finite and non-negative, counting them.
+double tracePath(const BidirectionalTracer& tracer, const Camera& camera, Sampler& sampler,
+                 std::vector<Splat>* splats, int64_t* rejected) {
+  splats->clear();
+  Vec2f film(sampler.next(kCameraStream) * camera.width(),
+             sampler.next(kCameraStream) * camera.height());
+  tracer.sample(film, sampler, splats);
+  double sum = 0;
+  size_t kept = 0;
+  for (const Splat& s : *splats) {
+    if (!isValidRadiance(s.value)) {
+      ++*rejected;
+      continue;
+    }
+    (*splats)[kept++] = s;
+    sum += luminance(s.value);
+  }
+  splats->resize(kept);
+  return sum;
+}
+
+}  // namespace
+
+void runPssmltChain(const Scene& scene, const ChainSpec& spec,
+                    const std::function<bool(ChainFlush&&)>& onFlush) {
+  const Camera& camera = scene.camera();
+  BidirectionalTracer tracer(scene, spec.maxDepth);
+  PrimarySampleSampler sampler(spec.seed, streamId(kChainDomain, spec.chainIndex),
+                               spec.largeStepProbability);
+  if (!spec.resumeState.empty()) {
+    if (!sampler.deserialize(spec.resumeState)) {
+      throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
+                               ": the resume state is corrupt");
+    }
+  } else {
+    if (spec.seedSample.empty()) {
+      throw std::runtime_error("chain " + std::to_string(spec.chainIndex) + " has no seed path");
+    }
+    sampler.setSeed(spec.seedSample);
+  }
+
+  int64_t rejected = 0;
+  std::vector<Splat> current, proposed;
+  // Rebuild the current state's path from its vector without mutating it.
+  sampler.setFrozen(true);
+  sampler.startPath();
+  double currentI = tracePath(tracer, camera, sampler, &current, &rejected);
+  sampler.setFrozen(false);
+  if (!(currentI > 0)) {
+    throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
+                             ": the seed path carries no light on this host");
+  }
+
+  SplatBuffer film(camera.width(), camera.height(), scene.description().camera.filter);
+  int64_t done = spec.resumeMutations;
+  int64_t sinceFlush = 0;
+  uint32_t flushIndex = spec.resumeFlushIndex;
+  const int64_t interval = std::max<int64_t>(1, spec.flushInterval);
+  auto flush = [&](bool finished) {
+    ChainFlush f;
+    f.chainIndex = spec.chainIndex;
+    f.flushIndex = flushIndex++;
+    f.mutations = sinceFlush;
+    f.width = camera.width();
+    f.height = camera.height();
+    f.splats = film.data();
+    f.rejectedSplats = rejected;
+    f.state = sampler.serialize();
+    f.finished = finished;
+    film.clear();
+    sinceFlush = 0;
+    rejected = 0;
+    return onFlush(std::move(f));
+  };
+
+  while (spec.budget < 0 || done < spec.budget) {
+    sampler.startIteration();
+    double proposedI = tracePath(tracer, camera, sampler, &proposed, &rejected);
+    // Acceptance a = min(1, I(y) / I(x)) (Kelemen et al. 2002, eq. 6, symmetric proposals).
+    double a = proposedI >= currentI ? 1.0 : proposedI / currentI;
+    if (a > 0) {
+      float w = float(a / proposedI);
+      for (const Splat& s : proposed) film.add(s.film, s.value, w);
+    }
+    if (a < 1) {
+      float w = float((1 - a) / currentI);
+      for (const Splat& s : current) film.add(s.film, s.value, w);
+    }
+    if (a >= 1 || sampler.rng().nextDouble() < a) {
+      std::swap(current, proposed);
+      currentI = proposedI;
+      sampler.accept();
+    } else {
+      sampler.reject();
+    }
+    ++done;
+    ++sinceFlush;
+    bool finished = spec.budget >= 0 && done >= spec.budget;
+    if (sinceFlush >= interval || finished) {
+      if (!flush(finished)) return;
+    }
+  }
+}
+
+}  // namespace farm

@@ -1,0 +1,18 @@
+#pragma once
+// One Kelemen-style Markov chain over BDPT in primary sample space (Kelemen et al. 2002), with
+// expected-value splatting: each iteration splats the proposal with weight a / I(proposal) and
+// the current state with (1 - a) / I(current), so the film holds sum of f / I and the image is
+// Z / M times it (Veach 1997, eq. 11.7 with the normalization of ../shared/DESIGN.md).
+#include <cstdint>
+#include <functional>
+
+#include "common/render/chain_spec.h"
+#include "common/render/render_job.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+
+void runPssmltChain(const Scene& scene, const ChainSpec& spec,
+                    const std::function<bool(ChainFlush&&)>& onFlush);
+
+}  // namespace farm

@@ -1,0 +1,266 @@
+#include "common/render/render_job.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/film/splat_buffer.h"
+#include "common/mcmc/bootstrap.h"
+#include "common/mcmc/pssmlt_chain.h"
+#include "common/scene/film_override.h"
+#include "common/scene/loaders/mitsuba_loader.h"
+#include "common/scene/scene.h"
+#include "common/transport/bidirectional.h"
+#include "common/transport/path_tracer.h"
+
+namespace farm {
+
+namespace {
+
+constexpr int kDefaultChains = 64;
+constexpr uint64_t kSampleDomain = 0x5a3b;
+// Time-budgeted sample chains draw from disjoint index ranges this far apart.
+constexpr int64_t kUnboundedChainStride = int64_t(1) << 40;
+
+std::string formatDouble(double v) {
+  std::ostringstream s;
+  s.precision(9);
+  s << v;
+  return s.str();
+}
+
+// Independent samples (pt, bdpt): sample k of the job uses RNG stream (seed, k). With a sample
+// budget, sample k lands in pixel k mod pixels (each pixel gets exactly spp samples, stratified
+// by order); with a time budget the film point is uniform over the image, so that stopping at
+// any count leaves the image unbiased.
+void runSampleChain(const Scene& scene, const ChainSpec& spec,
+                    const std::function<bool(ChainFlush&&)>& onFlush) {
+  const Camera& camera = scene.camera();
+  const int64_t pixels = int64_t(camera.width()) * camera.height();
+  PathTracer pt(scene, spec.maxDepth);
+  BidirectionalTracer bdpt(scene, spec.maxDepth);
+  SplatBuffer film(camera.width(), camera.height(), scene.description().camera.filter);
+  std::vector<Splat> splats;
+  int64_t done = spec.resumeMutations, sinceFlush = 0, rejected = 0;
+  uint32_t flushIndex = spec.resumeFlushIndex;
+  const int64_t interval = std::max<int64_t>(1, spec.flushInterval);
+  while (spec.budget < 0 || done < spec.budget) {
+    const int64_t k = spec.firstSample + done;
+    Rng rng(spec.seed, streamId(kSampleDomain, uint64_t(k)));
+    IndependentSampler sampler(&rng);
+    Vec2f p;
+    if (spec.budget >= 0) {
+      int64_t pixel = k % pixels;
+      p = Vec2f(float(pixel % camera.width()) + rng.nextFloat(),
+                float(pixel / camera.width()) + rng.nextFloat());
+    } else {
+      p = Vec2f(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
+    }
+    p.x = std::min(p.x, std::nextafter(float(camera.width()), 0.0f));
+    p.y = std::min(p.y, std::nextafter(float(camera.height()), 0.0f));
+    splats.clear();
+    if (spec.algorithm == Algorithm::PathTracing) pt.sample(p, sampler, &splats);
+    else bdpt.sample(p, sampler, &splats);
+    for (const Splat& s : splats) {
+      if (isValidRadiance(s.value)) film.add(s.film, s.value);
+      else ++rejected;
+    }
+    ++done;
+    ++sinceFlush;
+    bool finished = spec.budget >= 0 && done >= spec.budget;
+    if (sinceFlush >= interval || finished) {
+      ChainFlush f;
+      f.chainIndex = spec.chainIndex;
+      f.flushIndex = flushIndex++;
+      f.mutations = sinceFlush;
+      f.width = camera.width();
+      f.height = camera.height();
+      f.splats = film.data();
+      f.rejectedSplats = rejected;
+      f.state = std::to_string(done);
+      f.finished = finished;
+      film.clear();
+      sinceFlush = 0;
+      rejected = 0;
+      if (!onFlush(std::move(f))) return;
+    }
+  }
+}
+
+}  // namespace
+
+RenderJob::RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings,
+                     std::string jobId)
+    : scene_(std::move(scene)), settings_(std::move(settings)), jobId_(std::move(jobId)) {
+  std::string problem = settings_.validate();
+  if (!problem.empty()) throw std::invalid_argument(problem);
+}
+
+RenderJob::~RenderJob() = default;
+
+int RenderJob::width() const { return scene_->camera().width(); }
+int RenderJob::height() const { return scene_->camera().height(); }
+
+int64_t RenderJob::plannedWork() const {
+  if (settings_.timeBudgetSeconds > 0) return -1;
+  const int64_t pixels = int64_t(width()) * height();
+  return pixels * (isMarkovChain(settings_.algorithm) ? settings_.mutationsPerPixel
+                                                      : settings_.samplesPerPixel);
+}
+
+static int resolvedMaxDepth(const RenderSettings& s, const Scene& scene) {
+  if (s.maxDepth != 0) return s.maxDepth;
+  return scene.maxDepth() == 0 ? -1 : scene.maxDepth();
+}
+
+BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
+  BootstrapResult result;
+  if (!isMarkovChain(settings_.algorithm)) return result;
+  auto start = std::chrono::steady_clock::now();
+  const int64_t pixels = int64_t(width()) * height();
+  int64_t count = settings_.bootstrapSamples > 0
+                      ? settings_.bootstrapSamples
+                      : std::clamp<int64_t>(4 * pixels, int64_t(1) << 18, int64_t(1) << 22);
+  if (scene_->lights().empty()) {
+    throw std::runtime_error("no light reaches the camera: the scene has no emitters");
+  }
+  BootstrapCandidates c = generateCandidates(
+      *scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, count,
+      [&](double f) { return !progress || progress(Progress{f}); });
+  if (c.contributions.empty()) throw std::runtime_error("bootstrap cancelled");
+  if (!(c.mean > 0)) {
+    throw std::runtime_error("no light reaches the camera: none of " + std::to_string(count) +
+                             " bidirectional candidate paths carries light");
+  }
+  result.normalization = c.mean;
+  result.normalizationStdError = c.stdError;
+  result.candidates = count;
+  result.nonZeroCandidates = c.nonZero;
+  const int chains = settings_.numChains > 0 ? settings_.numChains : kDefaultChains;
+  std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
+  for (int64_t i : picks) {
+    std::vector<float> u;
+    double I = evaluateCandidate(*scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, i,
+                                 &u);
+    result.seedSamples.push_back(std::move(u));
+    result.seedContributions.push_back(I);
+  }
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) const {
+  const bool mcmc = isMarkovChain(settings_.algorithm);
+  const int chains = mcmc ? int(bootstrap.seedSamples.size())
+                          : (settings_.numChains > 0 ? settings_.numChains : kDefaultChains);
+  if (mcmc && chains == 0) throw std::runtime_error("the bootstrap produced no seed paths");
+  const int64_t planned = plannedWork();
+  const int64_t pixels = int64_t(width()) * height();
+  // Flush about once per image's worth of work per chain: large enough that a flush's cost
+  // (the whole film) is small against the work it carries.
+  const int64_t interval = std::clamp<int64_t>(pixels, 4096, int64_t(1) << 20);
+  std::vector<ChainSpec> specs;
+  int64_t first = 0;
+  for (int c = 0; c < chains; ++c) {
+    ChainSpec s;
+    s.jobId = jobId_;
+    s.chainIndex = uint32_t(c);
+    s.algorithm = settings_.algorithm;
+    s.seed = settings_.seed;
+    s.maxDepth = resolvedMaxDepth(settings_, *scene_);
+    s.largeStepProbability = settings_.largeStepProbability;
+    if (planned < 0) {
+      s.budget = -1;
+      s.firstSample = int64_t(c) * kUnboundedChainStride;
+    } else {
+      s.budget = planned / chains + (c < planned % chains ? 1 : 0);
+      s.firstSample = first;
+      first += s.budget;
+    }
+    if (mcmc) {
+      s.seedSample = bootstrap.seedSamples[c];
+      s.seedContribution = bootstrap.seedContributions[c];
+    }
+    s.flushInterval = s.budget > 0 ? std::min(interval, s.budget) : interval;
+    specs.push_back(std::move(s));
+  }
+  return specs;
+}
+
+double RenderJob::imageScale(const BootstrapResult& bootstrap, int64_t workDone) const {
+  if (workDone <= 0) return 0;
+  if (isMarkovChain(settings_.algorithm)) return bootstrap.normalization / double(workDone);
+  return 1.0 / double(workDone);
+}
+
+void RenderJob::runChain(const ChainSpec& spec,
+                         const std::function<bool(ChainFlush&&)>& onFlush) const {
+  if (isMarkovChain(spec.algorithm)) runPssmltChain(*scene_, spec, onFlush);
+  else runSampleChain(*scene_, spec, onFlush);
+}
+
+namespace {
+// Share of a pixel's tent filter (radius one pixel, centred at i + 0.5) that lies on a film of n
+// pixels: one, but for the outermost pixels, whose filter reaches half a pixel past the edge.
+double tentMassInside(int i, int n) {
+  double mass = 1;
+  if (i == 0) mass -= 0.125;  // integral of the tent from 0.5 to 1 from the centre
+  if (i == n - 1) mass -= 0.125;
+  return mass;
+}
+}  // namespace
+
+Image RenderJob::resolve(const std::vector<double>& sums, double scale) const {
+  // Every estimator splats into pixel j with its filter h_j, so pixel j's expectation is the
+  // integral of h_j L over the film. Dividing by the filter's mass on the film makes border
+  // pixels the filter-weighted average that renderers report (no dark rim).
+  Image image(width(), height());
+  if (sums.size() < image.rgb.size()) return image;
+  const bool tent = scene_->description().camera.filter == FilterType::Tent;
+  for (int y = 0; y < image.height; ++y) {
+    double wy = tent ? tentMassInside(y, image.height) : 1.0;
+    for (int x = 0; x < image.width; ++x) {
+      double w = wy * (tent ? tentMassInside(x, image.width) : 1.0);
+      size_t i = (size_t(y) * image.width + x) * 3;
+      for (int c = 0; c < 3; ++c) image.rgb[i + c] = float(sums[i + c] * scale / w);
+    }
+  }
+  return image;
+}
+
+ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t workDone,
+                                  double seconds) const {
+  ImageMetadata m;
+  m["farm:algorithm"] = algorithmName(settings_.algorithm);
+  m["farm:scene"] = scene_->description().sourcePath;
+  m["farm:seed"] = std::to_string(settings_.seed);
+  m["farm:maxDepth"] = std::to_string(resolvedMaxDepth(settings_, *scene_));
+  m["farm:renderSeconds"] = formatDouble(seconds);
+  const double pixels = double(width()) * height();
+  if (isMarkovChain(settings_.algorithm)) {
+    m["farm:mutations"] = std::to_string(workDone);
+    m["farm:mutationsPerPixel"] = formatDouble(workDone / pixels);
+    m["farm:normalization"] = formatDouble(bootstrap.normalization);
+    m["farm:normalizationStdError"] = formatDouble(bootstrap.normalizationStdError);
+    m["farm:bootstrapCandidates"] = std::to_string(bootstrap.candidates);
+    m["farm:bootstrapSeconds"] = formatDouble(bootstrap.seconds);
+    m["farm:largeStepProbability"] = formatDouble(settings_.largeStepProbability);
+  } else {
+    m["farm:samples"] = std::to_string(workDone);
+    m["farm:samplesPerPixel"] = formatDouble(workDone / pixels);
+  }
+  return m;
+}
+
+std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& settings) {
+  SceneDescription desc = loadMitsubaScene(path);
+  if (settings.width > 0 || settings.height > 0) {
+    applyFilmOverride(desc, settings.width, settings.height);
+  }
+  return std::make_shared<Scene>(desc);
+}
+
+}  // namespace farm

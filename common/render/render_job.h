@@ -1,0 +1,91 @@
+#pragma once
+// One render, as both sides of the farm see it. The coordinator bootstraps and plans chains; a
+// worker runs ChainSpecs and reports ChainFlushes; whoever sums the flushes turns them into the
+// image with imageScale(). `farm render` runs the same steps in one process.
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/film/image.h"
+#include "common/render/chain_spec.h"
+#include "common/render/render_settings.h"
+
+namespace farm {
+
+class Scene;
+
+// The splats of one flush: the change to the film since the chain's previous flush.
+struct ChainFlush {
+  uint32_t chainIndex = 0;
+  uint32_t flushIndex = 0;       // 0, 1, 2, ... per chain
+  int64_t mutations = 0;         // mutations (or samples) this flush covers
+  int width = 0, height = 0;
+  std::vector<float> splats;     // width*height*3, to be added (in double) to the chain sums
+  int64_t rejectedSplats = 0;    // NaN, Inf or negative splats dropped at the source
+  std::string state;             // chain state after this flush (resume with ChainSpec)
+  bool finished = false;         // the chain's budget is spent
+};
+
+struct BootstrapResult {
+  // Normalization constant Z: expected scalar contribution (luminance) of one BDPT sample, i.e.
+  // the image-plane integral of luminance, and its standard error (Monte Carlo, from the
+  // candidates' sample variance). Zero for pt/bdpt, which need no bootstrap.
+  double normalization = 0;
+  double normalizationStdError = 0;
+  int64_t candidates = 0;          // candidate paths generated
+  int64_t nonZeroCandidates = 0;   // of them, those carrying light
+  double seconds = 0;
+  // Seeds resampled in proportion to weight, one per chain: primary-sample vector and I(u).
+  std::vector<std::vector<float>> seedSamples;
+  std::vector<double> seedContributions;
+};
+
+struct Progress {  // reported by long stages; return false from the callback to cancel
+  double fraction = 0;
+};
+using ProgressCallback = std::function<bool(const Progress&)>;
+
+class RenderJob {
+ public:
+  RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings, std::string jobId);
+  ~RenderJob();
+
+  const RenderSettings& settings() const { return settings_; }
+  const Scene& scene() const { return *scene_; }
+  int width() const;
+  int height() const;
+  // Total mutations (pssmlt) or samples (pt/bdpt) planned; < 0 with a time budget.
+  int64_t plannedWork() const;
+
+  // Coordinator, stage 1. Throws std::runtime_error with a clear message when no light reaches
+  // the camera (Z = 0) or on cancellation.
+  BootstrapResult bootstrap(const ProgressCallback& progress = {}) const;
+  // Coordinator, stage 2: independent work units whose budgets add up to plannedWork().
+  std::vector<ChainSpec> planChains(const BootstrapResult& bootstrap) const;
+  // image = imageScale * (sum of all flushes' splats); workDone = mutations/samples accepted.
+  double imageScale(const BootstrapResult& bootstrap, int64_t workDone) const;
+
+  // Worker: runs a chain to its budget (or until onFlush returns false), calling onFlush every
+  // spec.flushInterval mutations and once at the end. Deterministic for a given spec.
+  void runChain(const ChainSpec& spec, const std::function<bool(ChainFlush&&)>& onFlush) const;
+
+  // Image from summed splats (double) and the scale above.
+  Image resolve(const std::vector<double>& sums, double scale) const;
+  // EXR header attributes describing this render.
+  ImageMetadata metadata(const BootstrapResult& bootstrap, int64_t workDone, double seconds) const;
+
+ private:
+  std::shared_ptr<const Scene> scene_;
+  RenderSettings settings_;
+  std::string jobId_;
+};
+
+// Loads a scene file (Mitsuba 0.6 XML) and builds the renderer's scene, applying the film
+// overrides of `settings` (width/height keep the field of view). Throws std::runtime_error
+// with "file:line: problem" on bad input.
+std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& settings);
+
+}  // namespace farm

@@ -1,0 +1,54 @@
+#include "common/render/render_settings.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace farm {
+
+const char* algorithmName(Algorithm a) {
+  switch (a) {
+    case Algorithm::PathTracing: return "pt";
+    case Algorithm::Bidirectional: return "bdpt";
+    case Algorithm::PSSMLT: return "pssmlt";
+  }
+  return "?";
+}
+
+bool parseAlgorithm(const std::string& name, Algorithm* out) {
+  if (name == "pt") *out = Algorithm::PathTracing;
+  else if (name == "bdpt") *out = Algorithm::Bidirectional;
+  else if (name == "pssmlt") *out = Algorithm::PSSMLT;
+  else return false;
+  return true;
+}
+
+std::string RenderSettings::validate() const {
+  std::ostringstream err;
+  constexpr int kMaxSide = 1 << 16;
+  constexpr int64_t kMaxPixels = int64_t(1) << 28;
+  if (width < 0 || height < 0 || width > kMaxSide || height > kMaxSide) {
+    err << "film size " << width << "x" << height << " is out of range (1.." << kMaxSide << ")";
+  } else if (int64_t(width) * height > kMaxPixels) {
+    err << "film size " << width << "x" << height << " has more than 2^28 pixels";
+  } else if (samplesPerPixel < 1 || samplesPerPixel > (int64_t(1) << 24)) {
+    err << "samples per pixel must be in 1.." << (1 << 24) << ", not " << samplesPerPixel;
+  } else if (mutationsPerPixel < 1 || mutationsPerPixel > (int64_t(1) << 24)) {
+    err << "mutations per pixel must be in 1.." << (1 << 24) << ", not " << mutationsPerPixel;
+  } else if (!std::isfinite(timeBudgetSeconds) || timeBudgetSeconds < 0 ||
+             timeBudgetSeconds > 30 * 24 * 3600.0) {
+    err << "time budget must be a number of seconds between 0 and 30 days, not "
+        << timeBudgetSeconds;
+  } else if (maxDepth < -1 || maxDepth > 4096) {
+    err << "max depth must be -1 (unbounded), 0 (the scene's) or 1..4096, not " << maxDepth;
+  } else if (bootstrapSamples < 0 || bootstrapSamples > (int64_t(1) << 30)) {
+    err << "bootstrap samples must be in 0.." << (int64_t(1) << 30) << ", not "
+        << bootstrapSamples;
+  } else if (numChains < 0 || numChains > 1 << 20) {
+    err << "number of chains must be in 0.." << (1 << 20) << ", not " << numChains;
+  } else if (!(largeStepProbability > 0 && largeStepProbability <= 1)) {
+    err << "large-step probability must be in (0, 1], not " << largeStepProbability;
+  }
+  return err.str();
+}
+
+}  // namespace farm

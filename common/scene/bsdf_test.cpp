@@ -1,0 +1,149 @@
+// BSDF sampling must agree with evaluation and density: the weight returned by sample() is
+// f cos / pdf, pdf() reproduces the sampled density, and the albedo estimated by importance
+// sampling equals the one estimated by uniform hemisphere sampling of eval() (both unbiased
+// estimators of the same integral; tolerances from their standard errors).
+#include "common/scene/bsdf.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/sampling/rng.h"
+#include "common/sampling/warp.h"
+
+namespace farm {
+namespace {
+
+BsdfDescription conductor(MicrofacetDistribution d, float alpha) {
+  BsdfDescription b;
+  b.type = BsdfDescription::Type::RoughConductor;
+  b.distribution = d;
+  b.alpha = alpha;
+  b.eta = Spectrum(0.200438f, 0.924033f, 1.10221f);
+  b.k = Spectrum(3.91295f, 2.45285f, 2.14219f);
+  b.twoSided = true;
+  return b;
+}
+
+struct Estimate {
+  double mean = 0, stdError = 0;
+};
+
+template <typename F>
+Estimate monteCarlo(int n, F&& f) {
+  double s = 0, s2 = 0;
+  for (int i = 0; i < n; ++i) {
+    double v = f(i);
+    s += v;
+    s2 += v * v;
+  }
+  Estimate e;
+  e.mean = s / n;
+  e.stdError = std::sqrt(std::max(0.0, s2 / n - e.mean * e.mean) / n);
+  return e;
+}
+
+void checkSamplingConsistency(const BsdfDescription& desc, float cosThetaO) {
+  Bsdf bsdf(desc);
+  Vec3f wo(std::sqrt(1 - cosThetaO * cosThetaO), 0, cosThetaO);
+  Rng rng(7, 1);
+  const int n = 200000;
+  Estimate sampled = monteCarlo(n, [&](int) {
+    float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+    BsdfSample s;
+    if (!bsdf.sample(wo, u, TransportMode::Radiance, &s)) return 0.0;
+    Spectrum f = bsdf.eval(wo, s.wi, TransportMode::Radiance);
+    float pdf = bsdf.pdf(wo, s.wi);
+    // weight == f cos / pdf and pdf() == the sampled density, per sample
+    EXPECT_NEAR(pdf, s.pdf, 1e-3f * s.pdf + 1e-5f);
+    EXPECT_NEAR(s.weight.y, f.y * std::fabs(s.wi.z) / s.pdf, 1e-3f * s.weight.y + 1e-5f);
+    return double(s.weight.y);
+  });
+  Estimate uniform = monteCarlo(n, [&](int) {
+    Vec3f wi = squareToUniformSphere({rng.nextFloat(), rng.nextFloat()});
+    return double(bsdf.eval(wo, wi, TransportMode::Radiance).y * std::fabs(wi.z)) * 4 * kPi;
+  });
+  double tolerance = 5 * std::sqrt(sampled.stdError * sampled.stdError +
+                                   uniform.stdError * uniform.stdError);
+  EXPECT_NEAR(sampled.mean, uniform.mean, tolerance) << "cos(theta_o) " << cosThetaO;
+  EXPECT_LE(sampled.mean, 1.0 + tolerance);  // energy conservation
+}
+
+TEST(Bsdf, DiffuseSamplingMatchesEvaluation) {
+  BsdfDescription d;
+  d.reflectance = Spectrum(0.7f);
+  d.twoSided = true;
+  checkSamplingConsistency(d, 0.8f);
+  checkSamplingConsistency(d, -0.3f);
+  // Lambertian albedo is exactly the reflectance.
+  Bsdf bsdf(d);
+  Rng rng(1, 2);
+  Estimate e = monteCarlo(10000, [&](int) {
+    float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+    BsdfSample s;
+    bsdf.sample(Vec3f(0, 0, 1), u, TransportMode::Radiance, &s);
+    return double(s.weight.y);
+  });
+  EXPECT_NEAR(e.mean, 0.7, 1e-6);
+}
+
+TEST(Bsdf, BeckmannSamplingMatchesEvaluation) {
+  for (float alpha : {0.05f, 0.25f, 1.0f}) {
+    checkSamplingConsistency(conductor(MicrofacetDistribution::Beckmann, alpha), 0.9f);
+    checkSamplingConsistency(conductor(MicrofacetDistribution::Beckmann, alpha), 0.2f);
+  }
+}
+
+TEST(Bsdf, GgxSamplingMatchesEvaluation) {
+  for (float alpha : {0.05f, 0.25f, 1.0f}) {
+    checkSamplingConsistency(conductor(MicrofacetDistribution::GGX, alpha), 0.9f);
+    checkSamplingConsistency(conductor(MicrofacetDistribution::GGX, alpha), 0.2f);
+  }
+}
+
+TEST(Bsdf, DielectricConservesEnergyAndObeysSnell) {
+  BsdfDescription d;
+  d.type = BsdfDescription::Type::Dielectric;
+  d.intIOR = 1.5f;
+  d.extIOR = 1.0f;
+  Bsdf bsdf(d);
+  Vec3f wo = normalize(Vec3f(0.6f, 0, 0.8f));
+  Rng rng(3, 3);
+  int reflected = 0;
+  const int n = 100000;
+  for (int i = 0; i < n; ++i) {
+    float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+    BsdfSample s;
+    ASSERT_TRUE(bsdf.sample(wo, u, TransportMode::Importance, &s));
+    EXPECT_TRUE(s.delta);
+    EXPECT_NEAR(s.weight.x, 1.0f, 1e-6f);  // importance is not scaled by eta^2
+    if (s.wi.z > 0) {
+      ++reflected;
+    } else {
+      // Snell: sin(theta_t) = sin(theta_i) / 1.5
+      float sinT = std::sqrt(1 - s.wi.z * s.wi.z);
+      EXPECT_NEAR(sinT, 0.6f / 1.5f, 1e-5f);
+    }
+  }
+  float cosT;
+  float F = fresnelDielectric(0.8f, 1.5f, &cosT);
+  double p = double(reflected) / n;
+  EXPECT_NEAR(p, F, 5 * std::sqrt(F * (1 - F) / n));
+  // Radiance entering the denser medium is scaled by 1 / eta^2.
+  float u[3] = {0.999f, 0.5f, 0.5f};
+  BsdfSample s;
+  ASSERT_TRUE(bsdf.sample(wo, u, TransportMode::Radiance, &s));
+  EXPECT_NEAR(s.weight.x, 1 / 2.25f, 1e-6f);
+}
+
+TEST(Bsdf, FresnelLimits) {
+  float cosT;
+  EXPECT_NEAR(fresnelDielectric(1.0f, 1.5f, &cosT), 0.04f, 1e-6f);  // ((1.5-1)/(1.5+1))^2
+  EXPECT_EQ(fresnelDielectric(-0.1f, 1.5f, &cosT), 1.0f);           // total internal reflection
+  Spectrum f = fresnelConductor(1.0f, Spectrum(0.2f), Spectrum(3.9f));
+  // normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2)
+  EXPECT_NEAR(f.x, (0.64f + 15.21f) / (1.44f + 15.21f), 1e-5f);
+}
+
+}  // namespace
+}  // namespace farm

@@ -1,0 +1,236 @@
+#include "common/scene/scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "common/sampling/warp.h"
+
+namespace farm {
+
+namespace {
+
+void throwOnEmbreeError(RTCDevice device, const char* what) {
+  RTCError err = rtcGetDeviceError(device);
+  if (err != RTC_ERROR_NONE) {
+    throw std::runtime_error(std::string("Embree error ") + std::to_string(int(err)) + " in " +
+                             what);
+  }
+}
+
+float triangleArea(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  return 0.5f * length(cross(b - a, c - a));
+}
+
+}  // namespace
+
+Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
+  for (const BsdfDescription& b : desc_.bsdfs) bsdfs_.emplace_back(b);
+  bsdfs_.emplace_back(BsdfDescription{});  // default diffuse for shapes without a bsdf
+
+  RTCDevice device = rtcNewDevice(nullptr);
+  if (!device) throw std::runtime_error("Embree: cannot create a device");
+  device_ = device;
+  RTCScene scene = rtcNewScene(device);
+  scene_ = scene;
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+
+  Vec3f lo(kInfinity), hi(-kInfinity);
+  const int n = int(desc_.shapes.size());
+  shapeBsdf_.resize(n);
+  shapeLight_.assign(n, -1);
+  triangleCdf_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const ShapeDescription& s = desc_.shapes[i];
+    int b = s.bsdf;
+    shapeBsdf_[i] = (b >= 0 && b < int(desc_.bsdfs.size())) ? b : int(bsdfs_.size()) - 1;
+    float area = 0;
+    RTCGeometry geom;
+    if (s.type == ShapeDescription::Type::Sphere) {
+      geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+      float* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+          geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+      v[0] = s.center.x, v[1] = s.center.y, v[2] = s.center.z, v[3] = s.radius;
+      area = 4 * kPi * s.radius * s.radius;
+      lo = vmin(lo, s.center - Vec3f(s.radius));
+      hi = vmax(hi, s.center + Vec3f(s.radius));
+    } else {
+      const size_t nv = s.positions.size(), nt = s.indices.size() / 3;
+      geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      float* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+          geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
+      for (size_t k = 0; k < nv; ++k) {
+        v[3 * k] = s.positions[k].x, v[3 * k + 1] = s.positions[k].y,
+                  v[3 * k + 2] = s.positions[k].z;
+        lo = vmin(lo, s.positions[k]);
+        hi = vmax(hi, s.positions[k]);
+      }
+      unsigned* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+          geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
+      std::copy(s.indices.begin(), s.indices.begin() + 3 * nt, idx);
+      if (s.isEmitter) {
+        std::vector<float>& cdf = triangleCdf_[i];
+        cdf.reserve(nt);
+        for (size_t t = 0; t < nt; ++t) {
+          area += triangleArea(s.positions[s.indices[3 * t]], s.positions[s.indices[3 * t + 1]],
+                               s.positions[s.indices[3 * t + 2]]);
+          cdf.push_back(area);
+        }
+      }
+    }
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(scene, geom, unsigned(i));
+    rtcReleaseGeometry(geom);
+    throwOnEmbreeError(device, "building the scene geometry");
+
+    if (s.isEmitter && area > 0 && luminance(s.radiance) > 0) {
+      AreaLight light;
+      light.shape = i;
+      light.radiance = s.radiance;
+      light.area = area;
+      light.power = luminance(s.radiance) * area * kPi;
+      shapeLight_[i] = int(lights_.size());
+      lights_.push_back(light);
+    }
+  }
+  rtcCommitScene(scene);
+  throwOnEmbreeError(device, "committing the scene");
+  if (n > 0) extent_ = std::max(1e-6f, 0.5f * length(hi - lo));
+  if (!std::isfinite(extent_)) extent_ = 1;
+
+  float total = 0;
+  for (const AreaLight& l : lights_) {
+    total += l.power;
+    lightCdf_.push_back(total);
+  }
+}
+
+Scene::~Scene() {
+  if (scene_) rtcReleaseScene(static_cast<RTCScene>(scene_));
+  if (device_) rtcReleaseDevice(static_cast<RTCDevice>(device_));
+}
+
+float Scene::offsetFor(const Vec3f& p) const {
+  // Relative to the magnitude of the coordinates (float rounding of the hit point) and to the
+  // scene's size, so that huge and tiny scenes behave alike.
+  return 1e-5f * (maxAbsComponent(p) + extent_);
+}
+
+Ray Scene::spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const {
+  Ray r;
+  float side = dot(ng, d) >= 0 ? 1.0f : -1.0f;
+  r.o = p + ng * (side * offsetFor(p));
+  r.d = d;
+  return r;
+}
+
+bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
+  rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
+  rh.ray.tnear = 0;
+  rh.ray.tfar = r.tMax;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.flags = 0;
+  rh.ray.time = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(static_cast<RTCScene>(scene_), &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+  const int shape = int(rh.hit.geomID);
+  const ShapeDescription& s = desc_.shapes[shape];
+  hit->shape = shape;
+  hit->primitive = rh.hit.primID;
+  hit->t = rh.ray.tfar;
+  if (s.type == ShapeDescription::Type::Sphere) {
+    Vec3f p = r.o + r.d * rh.ray.tfar;
+    Vec3f n = normalize(p - s.center);
+    hit->p = s.center + n * s.radius;  // back onto the surface
+    hit->ng = s.flipNormals ? -n : n;
+  } else {
+    const uint32_t* tri = &s.indices[3 * size_t(rh.hit.primID)];
+    const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
+    float u = rh.hit.u, v = rh.hit.v;
+    hit->p = a * (1 - u - v) + b * u + c * v;  // barycentric: more accurate than o + t d
+    Vec3f ng = cross(b - a, c - a);
+    float len = length(ng);
+    if (!(len > 0)) return false;  // degenerate triangle
+    ng = ng / len;
+    if (!s.faceNormals && !s.normals.empty()) {
+      // Orient the face by its vertex normals, which say where the outside is.
+      Vec3f ns = s.normals[tri[0]] * (1 - u - v) + s.normals[tri[1]] * u + s.normals[tri[2]] * v;
+      if (dot(ns, ng) < 0) ng = -ng;
+    }
+    hit->ng = s.flipNormals ? -ng : ng;
+  }
+  return true;
+}
+
+bool Scene::visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1) const {
+  Vec3f d = p1 - p0;
+  Vec3f o = p0, e = p1;
+  if (lengthSquared(n0) > 0) o = p0 + n0 * ((dot(n0, d) >= 0 ? 1.0f : -1.0f) * offsetFor(p0));
+  if (lengthSquared(n1) > 0) e = p1 + n1 * ((dot(n1, d) <= 0 ? 1.0f : -1.0f) * offsetFor(p1));
+  Vec3f dir = e - o;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay ray;
+  ray.org_x = o.x, ray.org_y = o.y, ray.org_z = o.z;
+  ray.dir_x = dir.x, ray.dir_y = dir.y, ray.dir_z = dir.z;
+  ray.tnear = 0;
+  ray.tfar = 1.0f - 1e-4f;
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0;
+  rtcOccluded1(static_cast<RTCScene>(scene_), &context, &ray);
+  return ray.tfar >= 0;  // Embree sets tfar to -inf on a hit
+}
+
+int Scene::pickLight(float u, float* pdf) const {
+  if (lights_.empty()) return -1;
+  float total = lightCdf_.back();
+  float target = u * total;
+  int i = int(std::upper_bound(lightCdf_.begin(), lightCdf_.end(), target) - lightCdf_.begin());
+  i = std::min(i, int(lights_.size()) - 1);
+  *pdf = lights_[i].power / total;
+  return i;
+}
+
+float Scene::lightPickPdf(int light) const {
+  if (light < 0 || lights_.empty()) return 0;
+  return lights_[light].power / lightCdf_.back();
+}
+
+void Scene::sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const {
+  const AreaLight& l = lights_[light];
+  const ShapeDescription& s = desc_.shapes[l.shape];
+  if (s.type == ShapeDescription::Type::Sphere) {
+    Vec3f d = squareToUniformSphere({u[1], u[2]});
+    *p = s.center + d * s.radius;
+    *n = s.flipNormals ? -d : d;
+    return;
+  }
+  const std::vector<float>& cdf = triangleCdf_[l.shape];
+  float target = u[0] * cdf.back();
+  size_t t = std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin();
+  t = std::min(t, cdf.size() - 1);
+  const uint32_t* tri = &s.indices[3 * t];
+  const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
+  Vec2f bary = squareToTriangle({u[1], u[2]});
+  *p = a * bary.x + b * bary.y + c * (1 - bary.x - bary.y);
+  Vec3f ng = normalize(cross(b - a, c - a));
+  if (!s.faceNormals && !s.normals.empty()) {
+    Vec3f ns = s.normals[tri[0]] * bary.x + s.normals[tri[1]] * bary.y +
+               s.normals[tri[2]] * (1 - bary.x - bary.y);
+    if (dot(ns, ng) < 0) ng = -ng;
+  }
+  *n = s.flipNormals ? -ng : ng;
+}
+
+}  // namespace farm

@@ -1,0 +1,76 @@
+#pragma once
+// The renderer's scene: the description turned into Embree geometry, BSDFs, area lights and the
+// camera. Read-only after construction and shared by all threads of a process.
+#include <memory>
+#include <vector>
+
+#include "common/scene/bsdf.h"
+#include "common/scene/camera.h"
+#include "common/scene/scene_description.h"
+
+namespace farm {
+
+struct SurfaceHit {
+  Vec3f p;          // on the surface (re-projected for accuracy)
+  Vec3f ng;         // unit geometric normal, oriented as the shape defines it (outside)
+  float t = 0;
+  int shape = -1;
+  uint32_t primitive = 0;
+};
+
+// An area light: one emitting shape, sampled uniformly by area, emitting on its normal's side.
+struct AreaLight {
+  int shape = -1;
+  Spectrum radiance;
+  float area = 0;
+  float power = 0;  // luminance of radiance * area * pi: the light selection weight
+};
+
+class Scene {
+ public:
+  explicit Scene(const SceneDescription& desc);
+  ~Scene();
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  const Camera& camera() const { return camera_; }
+  const SceneDescription& description() const { return desc_; }
+  int maxDepth() const { return desc_.maxDepth; }  // edges; -1 unbounded
+  float extent() const { return extent_; }         // radius of the bounding sphere
+
+  // Closest hit along r within (0, r.tMax); false when the ray leaves the scene.
+  bool intersect(const Ray& r, SurfaceHit* hit) const;
+  // True when nothing blocks the segment between two points; pass n = 0 for a point (camera).
+  bool visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1) const;
+  // A ray leaving surface point p (geometric normal ng) in direction d, offset off the surface.
+  Ray spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const;
+
+  const Bsdf& bsdfOf(int shape) const { return bsdfs_[shapeBsdf_[shape]]; }
+  int lightOf(int shape) const { return shapeLight_[shape]; }  // -1 when not an emitter
+
+  const std::vector<AreaLight>& lights() const { return lights_; }
+  // Chooses a light in proportion to power; *pdf is its discrete probability.
+  int pickLight(float u, float* pdf) const;
+  float lightPickPdf(int light) const;
+  // Uniform point on the light; the area density is 1 / area.
+  void sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const;
+  Spectrum emitted(int light, const Vec3f& n, const Vec3f& w) const {
+    return dot(n, w) > 0 ? lights_[light].radiance : Spectrum(0.0f);
+  }
+
+ private:
+  float offsetFor(const Vec3f& p) const;
+
+  SceneDescription desc_;
+  Camera camera_;
+  std::vector<Bsdf> bsdfs_;
+  std::vector<int> shapeBsdf_, shapeLight_;
+  std::vector<std::vector<float>> triangleCdf_;  // per emitting mesh shape: area CDF
+  std::vector<AreaLight> lights_;
+  std::vector<float> lightCdf_;
+  float extent_ = 1;
+  void* device_ = nullptr;  // RTCDevice
+  void* scene_ = nullptr;   // RTCScene
+};
+
+}  // namespace farm

@@ -1,0 +1,74 @@
+#pragma once
+// What a scene file says, resolved and in world space: the loaders' output and the only input of
+// Scene (the renderer's ray-traceable form). Shapes are triangle meshes except spheres, which stay
+// analytic. Plain data: no Embree, no file handles.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/math/transform.h"
+#include "common/math/vec.h"
+
+namespace farm {
+
+enum class FovAxis { X, Y, Smaller, Larger, Diagonal };
+enum class FilterType { Box, Tent };
+
+struct CameraDescription {
+  // Camera-to-world. Camera space as Mitsuba's perspective sensor: looks down +z, +y up,
+  // +x towards the image's left.
+  Matrix4 toWorld = Matrix4::identity();
+  float fovDegrees = 45.0f;
+  FovAxis fovAxis = FovAxis::X;
+  int width = 768, height = 576;  // film size in pixels
+  FilterType filter = FilterType::Tent;
+};
+
+enum class MicrofacetDistribution { Beckmann, GGX };
+
+struct BsdfDescription {
+  enum class Type { Diffuse, Dielectric, RoughConductor };
+  Type type = Type::Diffuse;
+  std::string id;          // the XML id, or empty
+  bool twoSided = false;   // wrapped in Mitsuba's "twosided"
+  // diffuse
+  Spectrum reflectance{0.5f};
+  // dielectric (smooth): interior and exterior indices of refraction
+  float intIOR = 1.5046f, extIOR = 1.000277f;
+  // roughconductor
+  MicrofacetDistribution distribution = MicrofacetDistribution::Beckmann;
+  float alpha = 0.1f;
+  Spectrum eta{0.0f}, k{1.0f};     // complex index of refraction of the conductor
+  float extEta = 1.0f;             // index of the exterior medium
+  Spectrum specularReflectance{1.0f};
+};
+
+struct ShapeDescription {
+  enum class Type { TriangleMesh, Sphere };
+  Type type = Type::TriangleMesh;
+  // TriangleMesh, world space
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;       // per vertex, may be empty (then geometric normals are used)
+  std::vector<uint32_t> indices;    // 3 per triangle
+  bool faceNormals = false;         // ignore vertex normals
+  // Sphere, world space
+  Vec3f center;
+  float radius = 1.0f;
+  bool flipNormals = false;
+  // Material and emission
+  int bsdf = -1;                    // index into SceneDescription::bsdfs
+  bool isEmitter = false;
+  Spectrum radiance{0.0f};          // area emitter radiance (emits on the side the normal faces)
+  // Where it came from, for messages
+  std::string origin;               // e.g. "scene.xml:42 (obj models/Mesh001.obj)"
+};
+
+struct SceneDescription {
+  std::string sourcePath;
+  CameraDescription camera;
+  int maxDepth = -1;                // longest path in edges, Mitsuba's convention; -1 = unbounded
+  std::vector<BsdfDescription> bsdfs;
+  std::vector<ShapeDescription> shapes;
+};
+
+}  // namespace farm

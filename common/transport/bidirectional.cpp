@@ -1,0 +1,317 @@
+#include "common/transport/bidirectional.h"
+
+#include <cmath>
+#include <limits>
+
+#include "common/sampling/warp.h"
+#include "common/transport/path_tracer.h"
+
+namespace farm {
+
+namespace {
+
+// Converts a solid-angle density at `from` towards `to` into an area density at `to`.
+float toAreaDensity(float pdfSolidAngle, const Vec3f& from, const PathVertex& to) {
+  Vec3f d = to.p - from;
+  float d2 = lengthSquared(d);
+  if (!(d2 > 0)) return 0;
+  float cosTo = lengthSquared(to.n) > 0 ? absDot(to.n, d) / std::sqrt(d2) : 1.0f;
+  return pdfSolidAngle * cosTo / d2;
+}
+
+Vec3f directionTo(const Vec3f& from, const Vec3f& to) { return normalize(to - from); }
+
+}  // namespace
+
+BidirectionalTracer::BidirectionalTracer(const Scene& scene, int maxDepth, MisHeuristic heuristic)
+    : scene_(scene), maxDepth_(maxDepth < 0 ? kUnboundedDepth : maxDepth), heuristic_(heuristic) {}
+
+int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sampler& sampler,
+                                    SampleStream stream, TransportMode mode, int maxVertices,
+                                    PathVertex* path) const {
+  int count = 1;  // path[0] is the endpoint
+  while (count < maxVertices) {
+    SurfaceHit hit;
+    ++rays_;
+    if (!scene_.intersect(ray, &hit)) break;
+    PathVertex& v = path[count];
+    PathVertex& prev = path[count - 1];
+    v = PathVertex();
+    v.kind = PathVertex::Kind::Surface;
+    v.p = hit.p;
+    v.n = hit.ng;
+    v.wo = -ray.d;
+    v.shape = hit.shape;
+    v.light = scene_.lightOf(hit.shape);
+    v.beta = beta;
+    v.pdfFwd = toAreaDensity(pdfDir, prev.p, v);
+    ++count;
+    if (count >= maxVertices) break;
+
+    const Bsdf& bsdf = scene_.bsdfOf(hit.shape);
+    float u[3] = {sampler.next(stream), sampler.next(stream), sampler.next(stream)};
+    float uRoulette = sampler.next(stream);
+    if (bsdf.isBlack()) break;
+    Frame frame(v.n);
+    Vec3f wo = frame.toLocal(v.wo);
+    BsdfSample bs;
+    if (!bsdf.sample(wo, u, mode, &bs)) break;
+    Vec3f wi = frame.toWorld(bs.wi);
+    float pdfRev;
+    if (bs.delta) {
+      // Dirac lobes: densities are not comparable with other strategies; the MIS weights skip
+      // connections at this vertex and treat its densities as one (Veach 1997, 10.3.5).
+      v.delta = true;
+      pdfDir = 0;
+      pdfRev = 0;
+    } else {
+      pdfDir = bs.pdf;
+      pdfRev = bsdf.pdf(bs.wi, wo);
+    }
+    beta *= bs.weight;
+    prev.pdfRev = toAreaDensity(pdfRev, v.p, prev);
+    if (count > kRussianRouletteDepth) {
+      float q = russianRouletteSurvival(maxComponent(bs.weight));
+      if (uRoulette >= q) break;
+      beta /= q;
+    }
+    if (isBlack(beta) || !isFinite(beta)) break;
+    ray = scene_.spawnRay(v.p, v.n, wi);
+  }
+  return count;
+}
+
+int BidirectionalTracer::traceCameraSubpath(const Vec2f& film, Sampler& sampler,
+                                            PathVertex* path) const {
+  const Camera& camera = scene_.camera();
+  Ray ray = camera.generateRay(film);
+  PathVertex& c = path[0];
+  c = PathVertex();
+  c.kind = PathVertex::Kind::Camera;
+  c.p = camera.position();
+  c.beta = Spectrum(1.0f);  // We / pdf = 1: film points are sampled uniformly
+  float pdfDir = camera.importance(ray.d);
+  return randomWalk(ray, Spectrum(1.0f), pdfDir, sampler, kCameraStream, TransportMode::Radiance,
+                    maxDepth_ + 1, path);
+}
+
+int BidirectionalTracer::traceLightSubpath(Sampler& sampler, PathVertex* path) const {
+  float uPick = sampler.next(kLightStream);
+  float uPoint[3] = {sampler.next(kLightStream), sampler.next(kLightStream),
+                     sampler.next(kLightStream)};
+  Vec2f uDir(sampler.next(kLightStream), sampler.next(kLightStream));
+  if (scene_.lights().empty() || maxDepth_ < 1) return 0;
+  float pickPdf;
+  int l = scene_.pickLight(uPick, &pickPdf);
+  const AreaLight& light = scene_.lights()[l];
+  Vec3f p, n;
+  scene_.sampleLightPoint(l, uPoint, &p, &n);
+  PathVertex& y = path[0];
+  y = PathVertex();
+  y.kind = PathVertex::Kind::Light;
+  y.p = p;
+  y.n = n;
+  y.shape = light.shape;
+  y.light = l;
+  float pdfPos = pickPdf / light.area;
+  y.pdfFwd = pdfPos;
+  y.beta = light.radiance / pdfPos;
+  if (maxDepth_ < 2) return 1;
+  // Area lights emit with a cosine distribution: sample it exactly, so beta keeps pi.
+  Vec3f local = squareToCosineHemisphere(uDir);
+  float pdfDir = cosineHemispherePdf(local.z);
+  if (!(pdfDir > 0)) return 1;
+  Vec3f d = Frame(n).toWorld(local);
+  Spectrum beta = y.beta * (local.z / pdfDir);
+  Ray ray = scene_.spawnRay(p, n, d);
+  return randomWalk(ray, beta, pdfDir, sampler, kLightStream, TransportMode::Importance, maxDepth_,
+                    path);
+}
+
+Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVertex* cameraPath,
+                                      int s, int t, Vec2f* film) const {
+  if (s == 0) {  // the camera subpath found a light by itself
+    const PathVertex& z = cameraPath[t - 1];
+    if (z.light < 0) return Spectrum(0.0f);
+    return z.beta * scene_.emitted(z.light, z.n, z.wo);
+  }
+  const PathVertex& y = lightPath[s - 1];
+  if (y.delta) return Spectrum(0.0f);
+  if (t == 1) {  // light tracing: connect to the camera and splat where it projects
+    const Camera& camera = scene_.camera();
+    Vec3f toCamera = camera.position() - y.p;
+    float d2 = lengthSquared(toCamera);
+    if (!(d2 > 0)) return Spectrum(0.0f);
+    Vec3f w = toCamera / std::sqrt(d2);
+    if (!camera.project(-w, film)) return Spectrum(0.0f);
+    float We = camera.importance(-w);
+    Spectrum f;
+    if (s == 1) {
+      f = dot(y.n, w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
+    } else {
+      Frame frame(y.n);
+      f = scene_.bsdfOf(y.shape).eval(frame.toLocal(y.wo), frame.toLocal(w),
+                                       TransportMode::Importance);
+    }
+    if (isBlack(f)) return Spectrum(0.0f);
+    ++rays_;
+    if (!scene_.visible(y.p, y.n, camera.position(), Vec3f(0.0f))) return Spectrum(0.0f);
+    return y.beta * f * (We * absDot(y.n, w) / d2 * camera.pixelCount());
+  }
+  const PathVertex& z = cameraPath[t - 1];
+  if (z.delta || z.kind != PathVertex::Kind::Surface) return Spectrum(0.0f);
+  Vec3f d = y.p - z.p;
+  float d2 = lengthSquared(d);
+  if (!(d2 > 0)) return Spectrum(0.0f);
+  Vec3f w = d / std::sqrt(d2);  // from z towards y
+  Frame fz(z.n);
+  Spectrum f = scene_.bsdfOf(z.shape).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
+  if (isBlack(f)) return Spectrum(0.0f);
+  if (s == 1) {
+    f *= dot(y.n, -w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
+  } else {
+    Frame fy(y.n);
+    f *= scene_.bsdfOf(y.shape).eval(fy.toLocal(y.wo), fy.toLocal(-w), TransportMode::Importance);
+  }
+  if (isBlack(f)) return Spectrum(0.0f);
+  float G = absDot(z.n, w) * absDot(y.n, w) / d2;
+  ++rays_;
+  if (!scene_.visible(z.p, z.n, y.p, y.n)) return Spectrum(0.0f);
+  return z.beta * f * y.beta * G;
+}
+
+double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVertex* cameraPath,
+                                      int s, int t) const {
+  // The full path x_0 .. x_{n-1} from the light to the camera. pL[i] and pE[i] are the area
+  // densities of x_i when sampled from the light side and from the camera side; strategy j
+  // (j light vertices) has density prod_{i<j} pL[i] prod_{i>=j} pE[i], so neighbouring
+  // strategies differ by one ratio pL/pE (Veach 1997, eq. 10.9).
+  const int n = s + t;
+  thread_local std::vector<double> pLStore, pEStore;
+  thread_local std::vector<char> deltaStore;
+  if (int(pLStore.size()) < n) pLStore.resize(n), pEStore.resize(n), deltaStore.resize(n);
+  double* pL = pLStore.data();
+  double* pE = pEStore.data();
+  char* delta = deltaStore.data();
+  auto at = [&](int i) -> const PathVertex& {
+    return i < s ? lightPath[i] : cameraPath[n - 1 - i];
+  };
+  for (int i = 0; i < n; ++i) {
+    const PathVertex& v = at(i);
+    if (i < s) pL[i] = v.pdfFwd, pE[i] = v.pdfRev;
+    else pL[i] = v.pdfRev, pE[i] = v.pdfFwd;
+    delta[i] = v.delta;
+  }
+  // Densities that change with this connection.
+  const PathVertex* y = s > 0 ? &lightPath[s - 1] : nullptr;
+  const PathVertex* z = t > 0 ? &cameraPath[t - 1] : nullptr;
+  if (s > 0 && z) {
+    // x_{s-1} sampled from the camera side: from z (whose predecessor is z_{t-2}).
+    Vec3f w = directionTo(z->p, y->p);
+    if (t == 1) {
+      pE[s - 1] = toAreaDensity(scene_.camera().importance(w), z->p, *y);
+    } else {
+      Frame fz(z->n);
+      float pdf = scene_.bsdfOf(z->shape).pdf(fz.toLocal(z->wo), fz.toLocal(w));
+      pE[s - 1] = toAreaDensity(pdf, z->p, *y);
+    }
+    if (s > 1) {  // x_{s-2} sampled from y, arriving from z
+      const PathVertex& yPrev = lightPath[s - 2];
+      Frame fy(y->n);
+      float pdf = scene_.bsdfOf(y->shape).pdf(fy.toLocal(-w), fy.toLocal(y->wo));
+      pE[s - 2] = toAreaDensity(pdf, y->p, yPrev);
+    }
+  }
+  if (t > 0) {
+    if (s == 0) {
+      // z lies on a light: its density as a light-subpath start, and the emission towards z_{t-2}.
+      pL[0] = scene_.lightPickPdf(z->light) / scene_.lights()[z->light].area;
+      if (t > 1) {
+        const PathVertex& zPrev = cameraPath[t - 2];
+        Vec3f w = directionTo(z->p, zPrev.p);
+        pL[1] = toAreaDensity(cosineHemispherePdf(dot(z->n, w)), z->p, zPrev);
+      }
+    } else {
+      Vec3f w = directionTo(y->p, z->p);
+      float pdf;
+      if (s == 1) {
+        pdf = cosineHemispherePdf(dot(y->n, w));
+      } else {
+        Frame fy(y->n);
+        pdf = scene_.bsdfOf(y->shape).pdf(fy.toLocal(y->wo), fy.toLocal(w));
+      }
+      pL[s] = toAreaDensity(pdf, y->p, *z);
+      if (t > 1) {  // z_{t-2} sampled from z, arriving from y
+        const PathVertex& zPrev = cameraPath[t - 2];
+        Frame fz(z->n);
+        float pdfz = scene_.bsdfOf(z->shape).pdf(fz.toLocal(-w), fz.toLocal(z->wo));
+        pL[s + 1] = toAreaDensity(pdfz, z->p, zPrev);
+      }
+    }
+  }
+  auto remap = [](double p) { return p != 0 ? p : 1.0; };
+  auto term = [&](double r) {
+    switch (heuristic_) {
+      case MisHeuristic::Balance: return r;
+      case MisHeuristic::Power: return r * r;
+      case MisHeuristic::Maximum: return r > 1 ? std::numeric_limits<double>::infinity() : 0.0;
+    }
+    return r;
+  };
+  double sum = 1;
+  bool dominated = false;  // maximum heuristic: a strategy with larger density exists
+  double r = 1;
+  for (int i = s; i <= n - 2; ++i) {  // strategies with more light vertices (j = i + 1)
+    r *= remap(pL[i]) / remap(pE[i]);
+    if (!delta[i] && !delta[i + 1]) {
+      double tr = term(r);
+      if (std::isinf(tr)) dominated = true;
+      else sum += tr;
+    }
+  }
+  r = 1;
+  for (int i = s - 1; i >= 0; --i) {  // strategies with fewer light vertices (j = i)
+    r *= remap(pE[i]) / remap(pL[i]);
+    bool connectible = !delta[i] && (i == 0 || !delta[i - 1]);
+    if (connectible) {
+      double tr = term(r);
+      if (std::isinf(tr)) dominated = true;
+      else sum += tr;
+    }
+  }
+  if (heuristic_ == MisHeuristic::Maximum) return dominated ? 0.0 : 1.0;
+  return 1 / sum;
+}
+
+void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
+                                 std::vector<Splat>* splats) const {
+  const int maxVertices = maxDepth_ + 1;
+  thread_local std::vector<PathVertex> cameraPath, lightPath;
+  if (int(cameraPath.size()) < maxVertices + 1) cameraPath.resize(maxVertices + 1);
+  if (int(lightPath.size()) < maxVertices + 1) lightPath.resize(maxVertices + 1);
+  const int nCamera = traceCameraSubpath(film, sampler, cameraPath.data());
+  const int nLight = traceLightSubpath(sampler, lightPath.data());
+  const float pixelCount = scene_.camera().pixelCount();
+  Spectrum cameraSum(0.0f);
+  for (int t = 1; t <= nCamera; ++t) {
+    for (int s = 0; s <= nLight; ++s) {
+      const int edges = s + t - 1;
+      if (edges < 1 || edges > maxDepth_) continue;
+      if (t == 1 && s == 0) continue;
+      Vec2f splatFilm = film;
+      Spectrum c = connect(lightPath.data(), cameraPath.data(), s, t, &splatFilm);
+      if (isBlack(c)) continue;
+      double w = misWeight(lightPath.data(), cameraPath.data(), s, t);
+      if (w <= 0) continue;
+      Spectrum value = c * float(w);
+      if (t == 1) {
+        splats->push_back({splatFilm, value});
+      } else {
+        cameraSum += value;
+      }
+    }
+  }
+  if (!isBlack(cameraSum)) splats->push_back({film, cameraSum * pixelCount});
+}
+
+}  // namespace farm

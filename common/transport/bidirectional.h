@@ -1,0 +1,58 @@
+#pragma once
+// Bidirectional path tracing (Veach and Guibas 1995; Veach 1997, ch. 10): a camera subpath and a
+// light subpath, connected by every (s, t) strategy, combined by multiple importance sampling.
+// Densities are kept per vertex in area measure, in both directions, so that MIS weights are
+// ratios of products along the path (Veach 1997, eq. 10.9).
+#include <cstdint>
+#include <vector>
+
+#include "common/film/splat_buffer.h"
+#include "common/scene/scene.h"
+#include "common/transport/sampler.h"
+
+namespace farm {
+
+struct PathVertex {
+  enum class Kind : uint8_t { Camera, Light, Surface };
+  Kind kind = Kind::Surface;
+  Vec3f p;
+  Vec3f n;          // geometric normal; zero for the (pinhole) camera
+  Vec3f wo;         // unit direction to the previous vertex of its own subpath
+  int shape = -1;
+  int light = -1;   // the area light this vertex lies on, or -1
+  Spectrum beta;    // subpath throughput up to here, divided by the sampling densities
+  float pdfFwd = 0; // area density of this vertex, sampled from its own subpath's side
+  float pdfRev = 0; // area density of this vertex, sampled from the other side
+  bool delta = false;  // scattered by a Dirac lobe here
+};
+
+enum class MisHeuristic { Balance, Power, Maximum };
+
+class BidirectionalTracer {
+ public:
+  BidirectionalTracer(const Scene& scene, int maxDepth,
+                      MisHeuristic heuristic = MisHeuristic::Power);
+
+  // One bidirectional sample: both subpaths, every connection; splats carry the estimator's
+  // values (camera strategies at `film`, light tracing where the light vertex projects).
+  void sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const;
+
+  uint64_t rays() const { return rays_; }
+
+ private:
+  int traceCameraSubpath(const Vec2f& film, Sampler& sampler, PathVertex* path) const;
+  int traceLightSubpath(Sampler& sampler, PathVertex* path) const;
+  int randomWalk(Ray ray, Spectrum beta, float pdfDir, Sampler& sampler, SampleStream stream,
+                 TransportMode mode, int maxVertices, PathVertex* path) const;
+  // Unweighted contribution of strategy (s, t); *film set for t == 1.
+  Spectrum connect(const PathVertex* light, const PathVertex* camera, int s, int t,
+                   Vec2f* film) const;
+  double misWeight(const PathVertex* light, const PathVertex* camera, int s, int t) const;
+
+  const Scene& scene_;
+  int maxDepth_;
+  MisHeuristic heuristic_;
+  mutable uint64_t rays_ = 0;
+};
+
+}  // namespace farm

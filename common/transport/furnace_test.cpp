@@ -1,0 +1,205 @@
+// Analytic answers for every estimator. A white furnace (a closed sphere that emits Le and
+// reflects with albedo rho, seen from inside) has radiance Le (1 - rho^D) / (1 - rho) for paths
+// of at most D edges everywhere; a diffuse floor under a spherical light has, at a point with
+// distance d to the light's centre at height h, irradiance pi Le r^2 h / d^3 (the sphere is
+// above the horizon). Tolerances come from the estimators' own variance: pixels of these
+// images are independent estimates whose spread gives the standard error of their mean.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/render/local_render.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+namespace {
+
+SceneDescription furnace(float albedo, int maxDepth) {
+  SceneDescription d;
+  d.camera.toWorld = Matrix4::identity();
+  d.camera.fovDegrees = 90;
+  d.camera.width = 24;
+  d.camera.height = 24;
+  d.maxDepth = maxDepth;
+  BsdfDescription b;
+  b.reflectance = Spectrum(albedo);
+  b.twoSided = true;
+  d.bsdfs.push_back(b);
+  ShapeDescription s;
+  s.type = ShapeDescription::Type::Sphere;
+  s.center = Vec3f(0.1f, -0.05f, 0.2f);
+  s.radius = 1.5f;
+  s.flipNormals = true;  // emit towards the inside
+  s.bsdf = 0;
+  s.isEmitter = true;
+  s.radiance = Spectrum(1.0f, 0.5f, 2.0f);
+  d.shapes.push_back(s);
+  return d;
+}
+
+struct PixelStats {
+  double mean[3] = {0, 0, 0};
+  double stdError[3] = {0, 0, 0};
+};
+
+PixelStats pixelStats(const Image& img) {
+  PixelStats st;
+  const size_t n = size_t(img.width) * img.height;
+  for (int c = 0; c < 3; ++c) {
+    double s = 0, s2 = 0;
+    for (size_t i = 0; i < n; ++i) {
+      double v = img.rgb[3 * i + c];
+      s += v;
+      s2 += v * v;
+    }
+    st.mean[c] = s / n;
+    st.stdError[c] = std::sqrt(std::max(0.0, s2 / n - st.mean[c] * st.mean[c]) / n);
+  }
+  return st;
+}
+
+void expectFurnace(Algorithm algorithm, int maxDepth) {
+  const float albedo = 0.6f;
+  SceneDescription desc = furnace(albedo, maxDepth);
+  auto scene = std::make_shared<Scene>(desc);
+  RenderSettings settings;
+  settings.algorithm = algorithm;
+  settings.samplesPerPixel = 64;
+  settings.mutationsPerPixel = 64;
+  settings.seed = 11;
+  RenderJob job(scene, settings, "furnace");
+  LocalRenderResult r = renderLocally(job);
+  const double D = maxDepth < 0 ? INFINITY : maxDepth;
+  const double factor = (1 - std::pow(double(albedo), D)) / (1 - albedo);
+  PixelStats st = pixelStats(r.image);
+  const double le[3] = {1.0, 0.5, 2.0};
+  for (int c = 0; c < 3; ++c) {
+    double expected = le[c] * factor;
+    double se = st.stdError[c];
+    if (isMarkovChain(algorithm)) {
+      // The image scales with Z: its relative standard error adds to the pixels' spread.
+      double zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+      se = std::sqrt(se * se + std::pow(expected * zRel, 2));
+    }
+    EXPECT_NEAR(st.mean[c], expected, 4 * se + 1e-6 * expected)
+        << algorithmName(algorithm) << " channel " << c << " maxDepth " << maxDepth;
+  }
+  EXPECT_EQ(r.rejectedSplats, 0);
+}
+
+TEST(Furnace, PathTracing) {
+  expectFurnace(Algorithm::PathTracing, -1);
+  expectFurnace(Algorithm::PathTracing, 3);
+}
+TEST(Furnace, Bidirectional) {
+  expectFurnace(Algorithm::Bidirectional, -1);
+  expectFurnace(Algorithm::Bidirectional, 3);
+}
+TEST(Furnace, Pssmlt) {
+  expectFurnace(Algorithm::PSSMLT, -1);
+  expectFurnace(Algorithm::PSSMLT, 3);
+}
+
+// A floor (a large rectangle at y = 0, normal +y) lit by a sphere of radius r at height h,
+// seen from above by a narrow camera, direct light only (maxDepth 2).
+void expectIrradiance(Algorithm algorithm) {
+  const float rho = 0.5f, h = 2.0f, radius = 0.25f, le = 10.0f;
+  SceneDescription d;
+  // Camera at (0.6, 3, 0.4) looking straight down: camera +z -> world -y.
+  Matrix4 m = Matrix4::identity();
+  m.m[0] = {1, 0, 0, 0.6};
+  m.m[1] = {0, 0, -1, 3.0};
+  m.m[2] = {0, 1, 0, 0.4};
+  d.camera.toWorld = m;
+  d.camera.fovDegrees = 10;
+  d.camera.width = 16;
+  d.camera.height = 16;
+  d.camera.filter = FilterType::Box;
+  d.maxDepth = 2;
+  BsdfDescription floor;
+  floor.reflectance = Spectrum(rho);
+  d.bsdfs.push_back(floor);
+  BsdfDescription black;
+  black.reflectance = Spectrum(0.0f);
+  d.bsdfs.push_back(black);
+  ShapeDescription plane;
+  plane.positions = {{-50, 0, -50}, {50, 0, -50}, {50, 0, 50}, {-50, 0, 50}};
+  plane.indices = {0, 2, 1, 0, 3, 2};  // counter-clockwise seen from +y
+  plane.bsdf = 0;
+  d.shapes.push_back(plane);
+  ShapeDescription light;
+  light.type = ShapeDescription::Type::Sphere;
+  light.center = Vec3f(0, h, 0);
+  light.radius = radius;
+  light.bsdf = 1;
+  light.isEmitter = true;
+  light.radiance = Spectrum(le);
+  d.shapes.push_back(light);
+  auto scene = std::make_shared<Scene>(d);
+
+  RenderSettings settings;
+  settings.algorithm = algorithm;
+  settings.samplesPerPixel = 256;
+  settings.mutationsPerPixel = 256;
+  settings.seed = 5;
+  RenderJob job(scene, settings, "irradiance");
+  LocalRenderResult r = renderLocally(job);
+
+  // Expected value of each pixel: the analytic radiance averaged over the pixel's footprint
+  // (box filter), integrated numerically on a fine grid.
+  const Camera& cam = scene->camera();
+  double sumErr2 = 0;
+  const int n = 16 * 16;
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) {
+      double expected = 0;
+      const int g = 8;
+      for (int j = 0; j < g; ++j) {
+        for (int i = 0; i < g; ++i) {
+          Ray ray = cam.generateRay(Vec2f(x + (i + 0.5f) / g, y + (j + 0.5f) / g));
+          float t = -ray.o.y / ray.d.y;
+          Vec3f p = ray.o + ray.d * t;
+          double dist = length(p - light.center);
+          expected += rho / kPi * kPi * le * radius * radius * h / (dist * dist * dist);
+        }
+      }
+      expected /= g * g;
+      double v = r.image.at(x, y).y;
+      sumErr2 += (v - expected) * (v - expected);
+    }
+  }
+  // The mean signed error over pixels must vanish within its standard error.
+  double meanSigned = 0, meanExpected = 0;
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) meanSigned += r.image.at(x, y).y;
+  }
+  meanSigned /= n;
+  {
+    double e = 0;
+    for (int y = 0; y < 16; ++y) {
+      for (int x = 0; x < 16; ++x) {
+        Ray ray = cam.generateRay(Vec2f(x + 0.5f, y + 0.5f));
+        float t = -ray.o.y / ray.d.y;
+        Vec3f p = ray.o + ray.d * t;
+        double dist = length(p - light.center);
+        e += rho * le * radius * radius * h / (dist * dist * dist);
+      }
+    }
+    meanExpected = e / n;
+  }
+  double rmsErr = std::sqrt(sumErr2 / n);
+  double se = rmsErr / std::sqrt(double(n));
+  if (isMarkovChain(algorithm)) {
+    double zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+    se = std::sqrt(se * se + std::pow(meanExpected * zRel, 2));
+  }
+  // Pixel-centre versus footprint average differs by far less than the noise at 10 degrees.
+  EXPECT_NEAR(meanSigned, meanExpected, 4 * se + 1e-3 * meanExpected) << algorithmName(algorithm);
+}
+
+TEST(AnalyticIrradiance, PathTracing) { expectIrradiance(Algorithm::PathTracing); }
+TEST(AnalyticIrradiance, Bidirectional) { expectIrradiance(Algorithm::Bidirectional); }
+TEST(AnalyticIrradiance, Pssmlt) { expectIrradiance(Algorithm::PSSMLT); }
+
+}  // namespace
+}  // namespace farm

@@ -1,0 +1,103 @@
+#include "common/transport/path_tracer.h"
+
+#include <cmath>
+
+namespace farm {
+
+namespace {
+float powerHeuristic(float a, float b) {
+  float a2 = a * a, b2 = b * b;
+  if (std::isinf(a2)) return 1;
+  return a2 > 0 ? a2 / (a2 + b2) : 0;
+}
+}  // namespace
+
+PathTracer::PathTracer(const Scene& scene, int maxDepth)
+    : scene_(scene), maxDepth_(maxDepth < 0 ? kUnboundedDepth : maxDepth) {}
+
+Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
+  Spectrum L(0.0f), beta(1.0f);
+  Ray ray = primary;
+  bool previousDelta = true;  // the camera ray cannot be light-sampled
+  float previousPdf = 0;      // solid-angle density of the last BSDF sample
+  Vec3f previousP = ray.o;
+  for (int depth = 1;; ++depth) {
+    SurfaceHit hit;
+    ++rays_;
+    if (!scene_.intersect(ray, &hit)) break;
+    const int light = scene_.lightOf(hit.shape);
+    if (light >= 0) {
+      Spectrum Le = scene_.emitted(light, hit.ng, -ray.d);
+      if (!isBlack(Le)) {
+        if (previousDelta) {
+          L += beta * Le;
+        } else {
+          // The same path could have come from next-event estimation: weight both (eq. 9.13).
+          float d2 = lengthSquared(hit.p - previousP);
+          float cosL = absDot(hit.ng, ray.d);
+          float pdfLight = scene_.lightPickPdf(light) / scene_.lights()[light].area * d2 / cosL;
+          L += beta * Le * powerHeuristic(previousPdf, pdfLight);
+        }
+      }
+    }
+    if (depth >= maxDepth_) break;
+
+    const Bsdf& bsdf = scene_.bsdfOf(hit.shape);
+    if (bsdf.isBlack()) break;
+    Frame frame(hit.ng);
+    Vec3f wo = frame.toLocal(-ray.d);
+
+    // Next-event estimation: a point on a light, connected if visible.
+    float uLight[4] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
+                       sampler.next(kCameraStream), sampler.next(kCameraStream)};
+    if (!bsdf.isDelta() && depth + 1 <= maxDepth_ && !scene_.lights().empty()) {
+      float pickPdf;
+      int l = scene_.pickLight(uLight[0], &pickPdf);
+      Vec3f pl, nl;
+      scene_.sampleLightPoint(l, &uLight[1], &pl, &nl);
+      Vec3f d = pl - hit.p;
+      float d2 = lengthSquared(d);
+      if (d2 > 0) {
+        Vec3f wiW = d / std::sqrt(d2);
+        Spectrum Le = scene_.emitted(l, nl, -wiW);
+        float cosL = absDot(nl, wiW);
+        Vec3f wi = frame.toLocal(wiW);
+        Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
+        if (!isBlack(Le) && !isBlack(f) && cosL > 0) {
+          float pdfLight = pickPdf / scene_.lights()[l].area * d2 / cosL;
+          ++rays_;
+          if (scene_.visible(hit.p, hit.ng, pl, nl)) {
+            float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
+            L += beta * f * Le * (std::fabs(wi.z) * w / pdfLight);
+          }
+        }
+      }
+    }
+
+    float u[3] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
+                  sampler.next(kCameraStream)};
+    float uRoulette = sampler.next(kCameraStream);
+    BsdfSample bs;
+    if (!bsdf.sample(wo, u, TransportMode::Radiance, &bs)) break;
+    beta *= bs.weight;
+    if (isBlack(beta)) break;
+    previousDelta = bs.delta;
+    previousPdf = bs.pdf;
+    previousP = hit.p;
+    if (depth >= kRussianRouletteDepth) {
+      float q = russianRouletteSurvival(maxComponent(bs.weight));
+      if (uRoulette >= q) break;
+      beta /= q;
+    }
+    ray = scene_.spawnRay(hit.p, hit.ng, frame.toWorld(bs.wi));
+  }
+  return L;
+}
+
+void PathTracer::sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const {
+  Ray r = scene_.camera().generateRay(film);
+  Spectrum L = radiance(r, sampler);
+  if (!isBlack(L)) splats->push_back({film, L * scene_.camera().pixelCount()});
+}
+
+}  // namespace farm
