@@ -8,7 +8,9 @@ namespace farm {
 SplatBuffer::SplatBuffer(int width, int height, FilterType filter)
     : width_(width), height_(height), filter_(filter), data_(size_t(width) * height * 3, 0.0f) {}
 
-void SplatBuffer::clear() { std::fill(data_.begin(), data_.end(), 0.0f); }
+void SplatBuffer::clear() {
+  std::fill(data_.begin(), data_.end(), 0.0f);
+}
 
 void SplatBuffer::add(const Vec2f& film, const Spectrum& v, float scale) {
   auto put = [&](int x, int y, float w) {

@@ -26,30 +26,83 @@ struct Vec3f {
   constexpr float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
   float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
   constexpr Vec3f operator-() const { return {-x, -y, -z}; }
-  Vec3f& operator+=(const Vec3f& o) { x += o.x; y += o.y; z += o.z; return *this; }
-  Vec3f& operator-=(const Vec3f& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-  Vec3f& operator*=(const Vec3f& o) { x *= o.x; y *= o.y; z *= o.z; return *this; }
-  Vec3f& operator*=(float s) { x *= s; y *= s; z *= s; return *this; }
-  Vec3f& operator/=(float s) { float inv = 1.0f / s; x *= inv; y *= inv; z *= inv; return *this; }
+  Vec3f& operator+=(const Vec3f& o) {
+    x += o.x;
+    y += o.y;
+    z += o.z;
+    return *this;
+  }
+  Vec3f& operator-=(const Vec3f& o) {
+    x -= o.x;
+    y -= o.y;
+    z -= o.z;
+    return *this;
+  }
+  Vec3f& operator*=(const Vec3f& o) {
+    x *= o.x;
+    y *= o.y;
+    z *= o.z;
+    return *this;
+  }
+  Vec3f& operator*=(float s) {
+    x *= s;
+    y *= s;
+    z *= s;
+    return *this;
+  }
+  Vec3f& operator/=(float s) {
+    float inv = 1.0f / s;
+    x *= inv;
+    y *= inv;
+    z *= inv;
+    return *this;
+  }
 };
 
-constexpr Vec3f operator+(const Vec3f& a, const Vec3f& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-constexpr Vec3f operator-(const Vec3f& a, const Vec3f& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-constexpr Vec3f operator*(const Vec3f& a, const Vec3f& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
-constexpr Vec3f operator*(const Vec3f& a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-constexpr Vec3f operator*(float s, const Vec3f& a) { return {a.x * s, a.y * s, a.z * s}; }
-inline Vec3f operator/(const Vec3f& a, float s) { float inv = 1.0f / s; return a * inv; }
-inline Vec3f operator/(const Vec3f& a, const Vec3f& b) { return {a.x / b.x, a.y / b.y, a.z / b.z}; }
+constexpr Vec3f operator+(const Vec3f& a, const Vec3f& b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+constexpr Vec3f operator-(const Vec3f& a, const Vec3f& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+constexpr Vec3f operator*(const Vec3f& a, const Vec3f& b) {
+  return {a.x * b.x, a.y * b.y, a.z * b.z};
+}
+constexpr Vec3f operator*(const Vec3f& a, float s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+constexpr Vec3f operator*(float s, const Vec3f& a) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+inline Vec3f operator/(const Vec3f& a, float s) {
+  float inv = 1.0f / s;
+  return a * inv;
+}
+inline Vec3f operator/(const Vec3f& a, const Vec3f& b) {
+  return {a.x / b.x, a.y / b.y, a.z / b.z};
+}
 
-constexpr float dot(const Vec3f& a, const Vec3f& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline float absDot(const Vec3f& a, const Vec3f& b) { return std::fabs(dot(a, b)); }
+constexpr float dot(const Vec3f& a, const Vec3f& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline float absDot(const Vec3f& a, const Vec3f& b) {
+  return std::fabs(dot(a, b));
+}
 constexpr Vec3f cross(const Vec3f& a, const Vec3f& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline float lengthSquared(const Vec3f& a) { return dot(a, a); }
-inline float length(const Vec3f& a) { return std::sqrt(dot(a, a)); }
-inline Vec3f normalize(const Vec3f& a) { return a / length(a); }
-inline float maxComponent(const Vec3f& a) { return std::max(a.x, std::max(a.y, a.z)); }
+inline float lengthSquared(const Vec3f& a) {
+  return dot(a, a);
+}
+inline float length(const Vec3f& a) {
+  return std::sqrt(dot(a, a));
+}
+inline Vec3f normalize(const Vec3f& a) {
+  return a / length(a);
+}
+inline float maxComponent(const Vec3f& a) {
+  return std::max(a.x, std::max(a.y, a.z));
+}
 inline float maxAbsComponent(const Vec3f& a) {
   return std::max(std::fabs(a.x), std::max(std::fabs(a.y), std::fabs(a.z)));
 }
@@ -62,13 +115,19 @@ inline Vec3f vmax(const Vec3f& a, const Vec3f& b) {
 inline bool isFinite(const Vec3f& a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
-inline Vec3f faceForward(const Vec3f& n, const Vec3f& v) { return dot(n, v) < 0 ? -n : n; }
+inline Vec3f faceForward(const Vec3f& n, const Vec3f& v) {
+  return dot(n, v) < 0 ? -n : n;
+}
 
 // RGB radiance / importance / throughput. Same storage as a vector; the alias documents intent.
 using Spectrum = Vec3f;
-inline bool isBlack(const Spectrum& s) { return s.x == 0 && s.y == 0 && s.z == 0; }
+inline bool isBlack(const Spectrum& s) {
+  return s.x == 0 && s.y == 0 && s.z == 0;
+}
 // The scalar contribution of DESIGN.md: luminance with Rec. 709 weights.
-inline float luminance(const Spectrum& s) { return 0.2126f * s.x + 0.7152f * s.y + 0.0722f * s.z; }
+inline float luminance(const Spectrum& s) {
+  return 0.2126f * s.x + 0.7152f * s.y + 0.0722f * s.z;
+}
 // A splat value is usable when it is finite and has no negative channel.
 inline bool isValidRadiance(const Spectrum& s) {
   return isFinite(s) && s.x >= 0 && s.y >= 0 && s.z >= 0;

@@ -70,8 +70,7 @@ BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_
   return out;
 }
 
-std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n,
-                                   uint64_t seed) {
+std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n, uint64_t seed) {
   std::vector<int64_t> picks;
   double total = 0;
   for (double c : contributions) total += c;

@@ -31,7 +31,6 @@ BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_
 
 // Draws `n` candidate indices with probability proportional to contribution (systematic
 // resampling with one random offset, which keeps the draws stratified).
-std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n,
-                                   uint64_t seed);
+std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n, uint64_t seed);
 
 }  // namespace farm

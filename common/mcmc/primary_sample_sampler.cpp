@@ -105,7 +105,9 @@ float PrimarySampleSampler::next(SampleStream stream) {
   return x_[index].value;
 }
 
-void PrimarySampleSampler::accept() { touched_.clear(); }
+void PrimarySampleSampler::accept() {
+  touched_.clear();
+}
 
 void PrimarySampleSampler::reject() {
   for (uint32_t i : touched_) {

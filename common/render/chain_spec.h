@@ -14,8 +14,8 @@ struct ChainSpec {
   std::string jobId;
   uint32_t chainIndex = 0;
   Algorithm algorithm = Algorithm::PSSMLT;
-  uint64_t seed = 1;              // job seed; the chain's RNG stream is derived from (seed, index)
-  int maxDepth = -1;              // longest path in edges (resolved; -1 unbounded)
+  uint64_t seed = 1;  // job seed; the chain's RNG stream is derived from (seed, index)
+  int maxDepth = -1;  // longest path in edges (resolved; -1 unbounded)
   float largeStepProbability = 0.3f;
   // pt/bdpt: global index of the first sample (the chain covers [firstSample, firstSample+budget))
   int64_t firstSample = 0;
@@ -24,7 +24,7 @@ struct ChainSpec {
   double seedContribution = 0;
   // mutations (pssmlt) or samples (pt/bdpt) this chain runs; < 0: until told to stop
   int64_t budget = 0;
-  int64_t flushInterval = 0;      // mutations (or samples) between flushes
+  int64_t flushInterval = 0;  // mutations (or samples) between flushes
   // Resume: the state a previous flush reported (empty: start from the seed); see ChainFlush.
   std::string resumeState;
   int64_t resumeMutations = 0;    // mutations already done when resumeState was taken

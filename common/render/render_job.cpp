@@ -61,11 +61,15 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
     p.x = std::min(p.x, std::nextafter(float(camera.width()), 0.0f));
     p.y = std::min(p.y, std::nextafter(float(camera.height()), 0.0f));
     splats.clear();
-    if (spec.algorithm == Algorithm::PathTracing) pt.sample(p, sampler, &splats);
-    else bdpt.sample(p, sampler, &splats);
+    if (spec.algorithm == Algorithm::PathTracing)
+      pt.sample(p, sampler, &splats);
+    else
+      bdpt.sample(p, sampler, &splats);
     for (const Splat& s : splats) {
-      if (isValidRadiance(s.value)) film.add(s.film, s.value);
-      else ++rejected;
+      if (isValidRadiance(s.value))
+        film.add(s.film, s.value);
+      else
+        ++rejected;
     }
     ++done;
     ++sinceFlush;
@@ -91,8 +95,7 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
 
 }  // namespace
 
-RenderJob::RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings,
-                     std::string jobId)
+RenderJob::RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings, std::string jobId)
     : scene_(std::move(scene)), settings_(std::move(settings)), jobId_(std::move(jobId)) {
   std::string problem = settings_.validate();
   if (!problem.empty()) throw std::invalid_argument(problem);
@@ -100,8 +103,12 @@ RenderJob::RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings
 
 RenderJob::~RenderJob() = default;
 
-int RenderJob::width() const { return scene_->camera().width(); }
-int RenderJob::height() const { return scene_->camera().height(); }
+int RenderJob::width() const {
+  return scene_->camera().width();
+}
+int RenderJob::height() const {
+  return scene_->camera().height();
+}
 
 int64_t RenderJob::plannedWork() const {
   if (settings_.timeBudgetSeconds > 0) return -1;
@@ -126,9 +133,9 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   if (scene_->lights().empty()) {
     throw std::runtime_error("no light reaches the camera: the scene has no emitters");
   }
-  BootstrapCandidates c = generateCandidates(
-      *scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, count,
-      [&](double f) { return !progress || progress(Progress{f}); });
+  BootstrapCandidates c =
+      generateCandidates(*scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, count,
+                         [&](double f) { return !progress || progress(Progress{f}); });
   if (c.contributions.empty()) throw std::runtime_error("bootstrap cancelled");
   if (!(c.mean > 0)) {
     throw std::runtime_error("no light reaches the camera: none of " + std::to_string(count) +
@@ -142,13 +149,12 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
   for (int64_t i : picks) {
     std::vector<float> u;
-    double I = evaluateCandidate(*scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, i,
-                                 &u);
+    double I =
+        evaluateCandidate(*scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, i, &u);
     result.seedSamples.push_back(std::move(u));
     result.seedContributions.push_back(I);
   }
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 
@@ -198,8 +204,10 @@ double RenderJob::imageScale(const BootstrapResult& bootstrap, int64_t workDone)
 
 void RenderJob::runChain(const ChainSpec& spec,
                          const std::function<bool(ChainFlush&&)>& onFlush) const {
-  if (isMarkovChain(spec.algorithm)) runPssmltChain(*scene_, spec, onFlush);
-  else runSampleChain(*scene_, spec, onFlush);
+  if (isMarkovChain(spec.algorithm))
+    runPssmltChain(*scene_, spec, onFlush);
+  else
+    runSampleChain(*scene_, spec, onFlush);
 }
 
 namespace {

@@ -20,13 +20,13 @@ class Scene;
 // The splats of one flush: the change to the film since the chain's previous flush.
 struct ChainFlush {
   uint32_t chainIndex = 0;
-  uint32_t flushIndex = 0;       // 0, 1, 2, ... per chain
-  int64_t mutations = 0;         // mutations (or samples) this flush covers
+  uint32_t flushIndex = 0;  // 0, 1, 2, ... per chain
+  int64_t mutations = 0;    // mutations (or samples) this flush covers
   int width = 0, height = 0;
-  std::vector<float> splats;     // width*height*3, to be added (in double) to the chain sums
-  int64_t rejectedSplats = 0;    // NaN, Inf or negative splats dropped at the source
-  std::string state;             // chain state after this flush (resume with ChainSpec)
-  bool finished = false;         // the chain's budget is spent
+  std::vector<float> splats;   // width*height*3, to be added (in double) to the chain sums
+  int64_t rejectedSplats = 0;  // NaN, Inf or negative splats dropped at the source
+  std::string state;           // chain state after this flush (resume with ChainSpec)
+  bool finished = false;       // the chain's budget is spent
 };
 
 struct BootstrapResult {
@@ -35,8 +35,8 @@ struct BootstrapResult {
   // candidates' sample variance). Zero for pt/bdpt, which need no bootstrap.
   double normalization = 0;
   double normalizationStdError = 0;
-  int64_t candidates = 0;          // candidate paths generated
-  int64_t nonZeroCandidates = 0;   // of them, those carrying light
+  int64_t candidates = 0;         // candidate paths generated
+  int64_t nonZeroCandidates = 0;  // of them, those carrying light
   double seconds = 0;
   // Seeds resampled in proportion to weight, one per chain: primary-sample vector and I(u).
   std::vector<std::vector<float>> seedSamples;

@@ -7,18 +7,25 @@ namespace farm {
 
 const char* algorithmName(Algorithm a) {
   switch (a) {
-    case Algorithm::PathTracing: return "pt";
-    case Algorithm::Bidirectional: return "bdpt";
-    case Algorithm::PSSMLT: return "pssmlt";
+    case Algorithm::PathTracing:
+      return "pt";
+    case Algorithm::Bidirectional:
+      return "bdpt";
+    case Algorithm::PSSMLT:
+      return "pssmlt";
   }
   return "?";
 }
 
 bool parseAlgorithm(const std::string& name, Algorithm* out) {
-  if (name == "pt") *out = Algorithm::PathTracing;
-  else if (name == "bdpt") *out = Algorithm::Bidirectional;
-  else if (name == "pssmlt") *out = Algorithm::PSSMLT;
-  else return false;
+  if (name == "pt")
+    *out = Algorithm::PathTracing;
+  else if (name == "bdpt")
+    *out = Algorithm::Bidirectional;
+  else if (name == "pssmlt")
+    *out = Algorithm::PSSMLT;
+  else
+    return false;
   return true;
 }
 
@@ -41,8 +48,7 @@ std::string RenderSettings::validate() const {
   } else if (maxDepth < -1 || maxDepth > 4096) {
     err << "max depth must be -1 (unbounded), 0 (the scene's) or 1..4096, not " << maxDepth;
   } else if (bootstrapSamples < 0 || bootstrapSamples > (int64_t(1) << 30)) {
-    err << "bootstrap samples must be in 0.." << (int64_t(1) << 30) << ", not "
-        << bootstrapSamples;
+    err << "bootstrap samples must be in 0.." << (int64_t(1) << 30) << ", not " << bootstrapSamples;
   } else if (numChains < 0 || numChains > 1 << 20) {
     err << "number of chains must be in 0.." << (1 << 20) << ", not " << numChains;
   } else if (!(largeStepProbability > 0 && largeStepProbability <= 1)) {

@@ -7,18 +7,20 @@ namespace farm {
 
 enum class Algorithm { PathTracing, Bidirectional, PSSMLT };
 
-const char* algorithmName(Algorithm a);                       // "pt", "bdpt", "pssmlt"
+const char* algorithmName(Algorithm a);                        // "pt", "bdpt", "pssmlt"
 bool parseAlgorithm(const std::string& name, Algorithm* out);  // accepts the names above
-inline bool isMarkovChain(Algorithm a) { return a == Algorithm::PSSMLT; }
+inline bool isMarkovChain(Algorithm a) {
+  return a == Algorithm::PSSMLT;
+}
 
 struct RenderSettings {
   Algorithm algorithm = Algorithm::PSSMLT;
-  int width = 0, height = 0;          // 0: the scene's film; one of them 0: keep the aspect ratio
-  int64_t samplesPerPixel = 16;       // pt, bdpt
-  int64_t mutationsPerPixel = 16;     // pssmlt
-  double timeBudgetSeconds = 0;       // > 0: stop at this wall-clock budget, not at a count
+  int width = 0, height = 0;       // 0: the scene's film; one of them 0: keep the aspect ratio
+  int64_t samplesPerPixel = 16;    // pt, bdpt
+  int64_t mutationsPerPixel = 16;  // pssmlt
+  double timeBudgetSeconds = 0;    // > 0: stop at this wall-clock budget, not at a count
   uint64_t seed = 1;
-  int maxDepth = 0;                   // 0: the scene's; else the longest path in edges
+  int maxDepth = 0;  // 0: the scene's; else the longest path in edges
   // Markov chain settings (PSSMLT)
   int64_t bootstrapSamples = 0;       // candidate paths; 0: a default from the film size
   int numChains = 0;                  // independent chains (work units); 0: default

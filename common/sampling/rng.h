@@ -35,7 +35,10 @@ class Rng {
 
   uint64_t state() const { return state_; }
   uint64_t increment() const { return inc_; }
-  void restore(uint64_t state, uint64_t inc) { state_ = state; inc_ = inc; }
+  void restore(uint64_t state, uint64_t inc) {
+    state_ = state;
+    inc_ = inc;
+  }
 
  private:
   uint64_t state_ = 0, inc_ = 1;
@@ -50,6 +53,8 @@ inline uint64_t mixBits(uint64_t v) {
   v ^= v >> 33;
   return v;
 }
-inline uint64_t streamId(uint64_t a, uint64_t b) { return mixBits(mixBits(a) ^ (b * 0x9e3779b97f4a7c15ULL)); }
+inline uint64_t streamId(uint64_t a, uint64_t b) {
+  return mixBits(mixBits(a) ^ (b * 0x9e3779b97f4a7c15ULL));
+}
 
 }  // namespace farm

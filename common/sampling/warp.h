@@ -27,7 +27,9 @@ inline Vec3f squareToCosineHemisphere(const Vec2f& u) {
   float z = std::sqrt(std::max(0.0f, 1 - d.x * d.x - d.y * d.y));
   return {d.x, d.y, z};
 }
-inline float cosineHemispherePdf(float cosTheta) { return cosTheta > 0 ? cosTheta * kInvPi : 0; }
+inline float cosineHemispherePdf(float cosTheta) {
+  return cosTheta > 0 ? cosTheta * kInvPi : 0;
+}
 
 inline Vec3f squareToUniformSphere(const Vec2f& u) {
   float z = 1 - 2 * u.x;

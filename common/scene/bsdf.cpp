@@ -54,7 +54,9 @@ Vec3f sampleMicrofacet(MicrofacetDistribution dist, float alpha, float u1, float
   return {sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta};
 }
 
-Vec3f reflect(const Vec3f& wo, const Vec3f& m) { return 2 * dot(wo, m) * m - wo; }
+Vec3f reflect(const Vec3f& wo, const Vec3f& m) {
+  return 2 * dot(wo, m) * m - wo;
+}
 
 }  // namespace
 
@@ -162,8 +164,7 @@ float Bsdf::pdf(const Vec3f& woIn, const Vec3f& wiIn) const {
   return 0;
 }
 
-bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode,
-                  BsdfSample* out) const {
+bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfSample* out) const {
   Vec3f wo = woIn;
   bool flipped = false;
   if (desc_.twoSided && wo.z < 0) {

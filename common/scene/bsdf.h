@@ -12,9 +12,9 @@ enum class TransportMode { Radiance, Importance };
 
 struct BsdfSample {
   Vec3f wi;
-  Spectrum weight;      // f(wo, wi) |cos(wi)| / pdf
-  float pdf = 0;        // solid-angle density (for a delta lobe: the discrete probability)
-  bool delta = false;   // sampled from a Dirac lobe: cannot be evaluated or connected to
+  Spectrum weight;     // f(wo, wi) |cos(wi)| / pdf
+  float pdf = 0;       // solid-angle density (for a delta lobe: the discrete probability)
+  bool delta = false;  // sampled from a Dirac lobe: cannot be evaluated or connected to
 };
 
 class Bsdf {

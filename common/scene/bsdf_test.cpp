@@ -63,8 +63,8 @@ void checkSamplingConsistency(const BsdfDescription& desc, float cosThetaO) {
     Vec3f wi = squareToUniformSphere({rng.nextFloat(), rng.nextFloat()});
     return double(bsdf.eval(wo, wi, TransportMode::Radiance).y * std::fabs(wi.z)) * 4 * kPi;
   });
-  double tolerance = 5 * std::sqrt(sampled.stdError * sampled.stdError +
-                                   uniform.stdError * uniform.stdError);
+  double tolerance =
+      5 * std::sqrt(sampled.stdError * sampled.stdError + uniform.stdError * uniform.stdError);
   EXPECT_NEAR(sampled.mean, uniform.mean, tolerance) << "cos(theta_o) " << cosThetaO;
   EXPECT_LE(sampled.mean, 1.0 + tolerance);  // energy conservation
 }

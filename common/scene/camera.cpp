@@ -22,12 +22,16 @@ Camera::Camera(const CameraDescription& desc) : width_(desc.width), height_(desc
       tanHalfY_ = t, tanHalfX_ = t * aspect;
       break;
     case FovAxis::Smaller:
-      if (aspect >= 1) tanHalfY_ = t, tanHalfX_ = t * aspect;
-      else tanHalfX_ = t, tanHalfY_ = t / aspect;
+      if (aspect >= 1)
+        tanHalfY_ = t, tanHalfX_ = t * aspect;
+      else
+        tanHalfX_ = t, tanHalfY_ = t / aspect;
       break;
     case FovAxis::Larger:
-      if (aspect >= 1) tanHalfX_ = t, tanHalfY_ = t / aspect;
-      else tanHalfY_ = t, tanHalfX_ = t * aspect;
+      if (aspect >= 1)
+        tanHalfX_ = t, tanHalfY_ = t / aspect;
+      else
+        tanHalfY_ = t, tanHalfX_ = t * aspect;
       break;
     case FovAxis::Diagonal: {
       float diag = std::sqrt(aspect * aspect + 1);

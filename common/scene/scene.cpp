@@ -64,7 +64,7 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
           geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
       for (size_t k = 0; k < nv; ++k) {
         v[3 * k] = s.positions[k].x, v[3 * k + 1] = s.positions[k].y,
-                  v[3 * k + 2] = s.positions[k].z;
+              v[3 * k + 2] = s.positions[k].z;
         lo = vmin(lo, s.positions[k]);
         hi = vmax(hi, s.positions[k]);
       }
@@ -153,6 +153,7 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
     Vec3f n = normalize(p - s.center);
     hit->p = s.center + n * s.radius;  // back onto the surface
     hit->ng = s.flipNormals ? -n : n;
+    hit->ns = hit->ng;
   } else {
     const uint32_t* tri = &s.indices[3 * size_t(rh.hit.primID)];
     const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
@@ -162,12 +163,18 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
     float len = length(ng);
     if (!(len > 0)) return false;  // degenerate triangle
     ng = ng / len;
+    Vec3f ns = ng;
     if (!s.faceNormals && !s.normals.empty()) {
-      // Orient the face by its vertex normals, which say where the outside is.
-      Vec3f ns = s.normals[tri[0]] * (1 - u - v) + s.normals[tri[1]] * u + s.normals[tri[2]] * v;
-      if (dot(ns, ng) < 0) ng = -ng;
+      // Smooth shading; the vertex normals also say where the outside is.
+      Vec3f n = s.normals[tri[0]] * (1 - u - v) + s.normals[tri[1]] * u + s.normals[tri[2]] * v;
+      float nl = length(n);
+      if (nl > 0 && std::isfinite(nl)) {
+        ns = n / nl;
+        if (dot(ns, ng) < 0) ng = -ng;
+      }
     }
     hit->ng = s.flipNormals ? -ng : ng;
+    hit->ns = s.flipNormals ? -ns : ns;
   }
   return true;
 }

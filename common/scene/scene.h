@@ -11,8 +11,9 @@
 namespace farm {
 
 struct SurfaceHit {
-  Vec3f p;          // on the surface (re-projected for accuracy)
-  Vec3f ng;         // unit geometric normal, oriented as the shape defines it (outside)
+  Vec3f p;   // on the surface (re-projected for accuracy)
+  Vec3f ng;  // unit geometric normal, oriented as the shape defines it (outside)
+  Vec3f ns;  // unit shading normal: interpolated vertex normals, else ng
   float t = 0;
   int shape = -1;
   uint32_t primitive = 0;
@@ -25,6 +26,19 @@ struct AreaLight {
   float area = 0;
   float power = 0;  // luminance of radiance * area * pi: the light selection weight
 };
+
+// Mitsuba's strictNormals: a direction is usable at a surface only when the geometric and the
+// shading normal agree on which side it lies; otherwise light would leak through the surface.
+inline bool sidesAgree(const Vec3f& w, const Vec3f& ng, const Vec3f& ns) {
+  return dot(w, ng) * dot(w, ns) > 0;
+}
+
+// The adjoint BSDF with shading normals is not the BSDF (Veach 1997, eq. 5.17): particles
+// (importance mode) scattered from wo to wi carry this extra factor.
+inline float shadingCorrection(const Vec3f& wo, const Vec3f& wi, const Vec3f& ng, const Vec3f& ns) {
+  float den = absDot(wo, ng) * absDot(wi, ns);
+  return den > 0 ? absDot(wo, ns) * absDot(wi, ng) / den : 0.0f;
+}
 
 class Scene {
  public:

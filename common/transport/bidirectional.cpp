@@ -19,7 +19,17 @@ float toAreaDensity(float pdfSolidAngle, const Vec3f& from, const PathVertex& to
   return pdfSolidAngle * cosTo / d2;
 }
 
-Vec3f directionTo(const Vec3f& from, const Vec3f& to) { return normalize(to - from); }
+Vec3f directionTo(const Vec3f& from, const Vec3f& to) {
+  return normalize(to - from);
+}
+
+// |cos| at the light subpath's end y towards w: geometric on an emitter (s == 1), otherwise the
+// shading cosine times the adjoint correction, |w.ng| |wo.ns| / |wo.ng|.
+float lightEndCosine(const PathVertex& y, const Vec3f& w, int s) {
+  if (s == 1) return absDot(y.n, w);
+  float den = absDot(y.wo, y.n);
+  return den > 0 ? absDot(w, y.n) * absDot(y.wo, y.ns) / den : 0.0f;
+}
 
 }  // namespace
 
@@ -40,6 +50,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
     v.kind = PathVertex::Kind::Surface;
     v.p = hit.p;
     v.n = hit.ng;
+    v.ns = hit.ns;
     v.wo = -ray.d;
     v.shape = hit.shape;
     v.light = scene_.lightOf(hit.shape);
@@ -51,12 +62,13 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
     const Bsdf& bsdf = scene_.bsdfOf(hit.shape);
     float u[3] = {sampler.next(stream), sampler.next(stream), sampler.next(stream)};
     float uRoulette = sampler.next(stream);
-    if (bsdf.isBlack()) break;
-    Frame frame(v.n);
+    if (bsdf.isBlack() || !sidesAgree(v.wo, v.n, v.ns)) break;
+    Frame frame(v.ns);
     Vec3f wo = frame.toLocal(v.wo);
     BsdfSample bs;
     if (!bsdf.sample(wo, u, mode, &bs)) break;
     Vec3f wi = frame.toWorld(bs.wi);
+    if (!sidesAgree(wi, v.n, v.ns)) break;
     float pdfRev;
     if (bs.delta) {
       // Dirac lobes: densities are not comparable with other strategies; the MIS weights skip
@@ -69,6 +81,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
       pdfRev = bsdf.pdf(bs.wi, wo);
     }
     beta *= bs.weight;
+    if (mode == TransportMode::Importance) beta *= shadingCorrection(v.wo, wi, v.n, v.ns);
     prev.pdfRev = toAreaDensity(pdfRev, v.p, prev);
     if (count > kRussianRouletteDepth) {
       float q = russianRouletteSurvival(maxComponent(bs.weight));
@@ -111,6 +124,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, PathVertex* path) c
   y.kind = PathVertex::Kind::Light;
   y.p = p;
   y.n = n;
+  y.ns = n;
   y.shape = light.shape;
   y.light = l;
   float pdfPos = pickPdf / light.area;
@@ -149,14 +163,15 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
     if (s == 1) {
       f = dot(y.n, w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
     } else {
-      Frame frame(y.n);
+      if (!sidesAgree(w, y.n, y.ns)) return Spectrum(0.0f);
+      Frame frame(y.ns);
       f = scene_.bsdfOf(y.shape).eval(frame.toLocal(y.wo), frame.toLocal(w),
-                                       TransportMode::Importance);
+                                      TransportMode::Importance);
     }
     if (isBlack(f)) return Spectrum(0.0f);
     ++rays_;
     if (!scene_.visible(y.p, y.n, camera.position(), Vec3f(0.0f))) return Spectrum(0.0f);
-    return y.beta * f * (We * absDot(y.n, w) / d2 * camera.pixelCount());
+    return y.beta * f * (We * lightEndCosine(y, w, s) / d2 * camera.pixelCount());
   }
   const PathVertex& z = cameraPath[t - 1];
   if (z.delta || z.kind != PathVertex::Kind::Surface) return Spectrum(0.0f);
@@ -164,17 +179,22 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   float d2 = lengthSquared(d);
   if (!(d2 > 0)) return Spectrum(0.0f);
   Vec3f w = d / std::sqrt(d2);  // from z towards y
-  Frame fz(z.n);
-  Spectrum f = scene_.bsdfOf(z.shape).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
+  if (!sidesAgree(w, z.n, z.ns)) return Spectrum(0.0f);
+  Frame fz(z.ns);
+  Spectrum f =
+      scene_.bsdfOf(z.shape).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
   if (isBlack(f)) return Spectrum(0.0f);
   if (s == 1) {
     f *= dot(y.n, -w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
   } else {
-    Frame fy(y.n);
+    if (!sidesAgree(-w, y.n, y.ns)) return Spectrum(0.0f);
+    Frame fy(y.ns);
     f *= scene_.bsdfOf(y.shape).eval(fy.toLocal(y.wo), fy.toLocal(-w), TransportMode::Importance);
   }
   if (isBlack(f)) return Spectrum(0.0f);
-  float G = absDot(z.n, w) * absDot(y.n, w) / d2;
+  // The camera side's cosine is the shading one (the rendering equation's); the light side's
+  // includes the adjoint correction for shading normals.
+  float G = absDot(z.ns, w) * lightEndCosine(y, -w, s) / d2;
   ++rays_;
   if (!scene_.visible(z.p, z.n, y.p, y.n)) return Spectrum(0.0f);
   return z.beta * f * y.beta * G;
@@ -198,8 +218,10 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
   };
   for (int i = 0; i < n; ++i) {
     const PathVertex& v = at(i);
-    if (i < s) pL[i] = v.pdfFwd, pE[i] = v.pdfRev;
-    else pL[i] = v.pdfRev, pE[i] = v.pdfFwd;
+    if (i < s)
+      pL[i] = v.pdfFwd, pE[i] = v.pdfRev;
+    else
+      pL[i] = v.pdfRev, pE[i] = v.pdfFwd;
     delta[i] = v.delta;
   }
   // Densities that change with this connection.
@@ -211,13 +233,13 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     if (t == 1) {
       pE[s - 1] = toAreaDensity(scene_.camera().importance(w), z->p, *y);
     } else {
-      Frame fz(z->n);
+      Frame fz(z->ns);
       float pdf = scene_.bsdfOf(z->shape).pdf(fz.toLocal(z->wo), fz.toLocal(w));
       pE[s - 1] = toAreaDensity(pdf, z->p, *y);
     }
     if (s > 1) {  // x_{s-2} sampled from y, arriving from z
       const PathVertex& yPrev = lightPath[s - 2];
-      Frame fy(y->n);
+      Frame fy(y->ns);
       float pdf = scene_.bsdfOf(y->shape).pdf(fy.toLocal(-w), fy.toLocal(y->wo));
       pE[s - 2] = toAreaDensity(pdf, y->p, yPrev);
     }
@@ -237,13 +259,13 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       if (s == 1) {
         pdf = cosineHemispherePdf(dot(y->n, w));
       } else {
-        Frame fy(y->n);
+        Frame fy(y->ns);
         pdf = scene_.bsdfOf(y->shape).pdf(fy.toLocal(y->wo), fy.toLocal(w));
       }
       pL[s] = toAreaDensity(pdf, y->p, *z);
       if (t > 1) {  // z_{t-2} sampled from z, arriving from y
         const PathVertex& zPrev = cameraPath[t - 2];
-        Frame fz(z->n);
+        Frame fz(z->ns);
         float pdfz = scene_.bsdfOf(z->shape).pdf(fz.toLocal(-w), fz.toLocal(z->wo));
         pL[s + 1] = toAreaDensity(pdfz, z->p, zPrev);
       }
@@ -252,9 +274,12 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
   auto remap = [](double p) { return p != 0 ? p : 1.0; };
   auto term = [&](double r) {
     switch (heuristic_) {
-      case MisHeuristic::Balance: return r;
-      case MisHeuristic::Power: return r * r;
-      case MisHeuristic::Maximum: return r > 1 ? std::numeric_limits<double>::infinity() : 0.0;
+      case MisHeuristic::Balance:
+        return r;
+      case MisHeuristic::Power:
+        return r * r;
+      case MisHeuristic::Maximum:
+        return r > 1 ? std::numeric_limits<double>::infinity() : 0.0;
     }
     return r;
   };
@@ -265,8 +290,10 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     r *= remap(pL[i]) / remap(pE[i]);
     if (!delta[i] && !delta[i + 1]) {
       double tr = term(r);
-      if (std::isinf(tr)) dominated = true;
-      else sum += tr;
+      if (std::isinf(tr))
+        dominated = true;
+      else
+        sum += tr;
     }
   }
   r = 1;
@@ -275,8 +302,10 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     bool connectible = !delta[i] && (i == 0 || !delta[i - 1]);
     if (connectible) {
       double tr = term(r);
-      if (std::isinf(tr)) dominated = true;
-      else sum += tr;
+      if (std::isinf(tr))
+        dominated = true;
+      else
+        sum += tr;
     }
   }
   if (heuristic_ == MisHeuristic::Maximum) return dominated ? 0.0 : 1.0;

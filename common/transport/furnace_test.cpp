@@ -197,9 +197,15 @@ void expectIrradiance(Algorithm algorithm) {
   EXPECT_NEAR(meanSigned, meanExpected, 4 * se + 1e-3 * meanExpected) << algorithmName(algorithm);
 }
 
-TEST(AnalyticIrradiance, PathTracing) { expectIrradiance(Algorithm::PathTracing); }
-TEST(AnalyticIrradiance, Bidirectional) { expectIrradiance(Algorithm::Bidirectional); }
-TEST(AnalyticIrradiance, Pssmlt) { expectIrradiance(Algorithm::PSSMLT); }
+TEST(AnalyticIrradiance, PathTracing) {
+  expectIrradiance(Algorithm::PathTracing);
+}
+TEST(AnalyticIrradiance, Bidirectional) {
+  expectIrradiance(Algorithm::Bidirectional);
+}
+TEST(AnalyticIrradiance, Pssmlt) {
+  expectIrradiance(Algorithm::PSSMLT);
+}
 
 }  // namespace
 }  // namespace farm

@@ -43,8 +43,8 @@ Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
     if (depth >= maxDepth_) break;
 
     const Bsdf& bsdf = scene_.bsdfOf(hit.shape);
-    if (bsdf.isBlack()) break;
-    Frame frame(hit.ng);
+    if (bsdf.isBlack() || !sidesAgree(-ray.d, hit.ng, hit.ns)) break;
+    Frame frame(hit.ns);
     Vec3f wo = frame.toLocal(-ray.d);
 
     // Next-event estimation: a point on a light, connected if visible.
@@ -63,7 +63,7 @@ Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
         float cosL = absDot(nl, wiW);
         Vec3f wi = frame.toLocal(wiW);
         Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
-        if (!isBlack(Le) && !isBlack(f) && cosL > 0) {
+        if (!isBlack(Le) && !isBlack(f) && cosL > 0 && sidesAgree(wiW, hit.ng, hit.ns)) {
           float pdfLight = pickPdf / scene_.lights()[l].area * d2 / cosL;
           ++rays_;
           if (scene_.visible(hit.p, hit.ng, pl, nl)) {
@@ -79,6 +79,8 @@ Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
     float uRoulette = sampler.next(kCameraStream);
     BsdfSample bs;
     if (!bsdf.sample(wo, u, TransportMode::Radiance, &bs)) break;
+    Vec3f wiWorld = frame.toWorld(bs.wi);
+    if (!sidesAgree(wiWorld, hit.ng, hit.ns)) break;
     beta *= bs.weight;
     if (isBlack(beta)) break;
     previousDelta = bs.delta;
@@ -89,7 +91,7 @@ Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
       if (uRoulette >= q) break;
       beta /= q;
     }
-    ray = scene_.spawnRay(hit.p, hit.ng, frame.toWorld(bs.wi));
+    ray = scene_.spawnRay(hit.p, hit.ng, wiWorld);
   }
   return L;
 }

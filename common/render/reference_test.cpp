@@ -1,0 +1,138 @@
+// Every estimator against the independent references of ../shared/references (Tungsten), at
+// the reference's resolution. Two independent renders a and b give each pixel's variance,
+// (a - b)^2 / 2, so that the tolerances come from the estimator's own variance:
+//  - per-channel means of the average (a + b) / 2 must lie within 4 standard errors of the
+//    reference's, the standard error being sqrt(sum of pixel variances) / pixels, plus for
+//    PSSMLT the relative standard error of Z, by which the whole image scales. The means leave
+//    out the pixels where the reference exceeds its 99.9th percentile (directly visible lights
+//    would decide them alone). imgcmp.py caps values there instead, but a cap biases a noisy
+//    image's mean low (its spikes are cut, its dips are not): 1% at 8 spp on the Cornell box;
+//  - relative MSE of the average against the reference must be explained by that variance: at
+//    most 1.5 times its expectation sum var / (r^2 + 0.01) / n. The margin covers the
+//    reference's own noise (4096 samples per pixel) and the fluctuation of this heavy-tailed
+//    sum; a bias (a mirrored image, a missing strategy, a wrong Jacobian) exceeds it many times.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "common/film/error_metrics.h"
+#include "common/film/image.h"
+#include "common/render/local_render.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+namespace {
+
+const std::string kShared = FARM_SHARED_DIR;
+
+struct Case {
+  std::string scene, reference;
+  Algorithm algorithm;
+  int64_t perPixel;  // spp or mpp for each of the two renders
+};
+
+void expectAgreement(const Case& c) {
+  Image ref;
+  std::string error;
+  ASSERT_TRUE(readExr(kShared + "/references/" + c.reference, &ref, &error)) << error;
+
+  LocalRenderResult r[2];
+  for (int k = 0; k < 2; ++k) {
+    RenderSettings s;
+    s.algorithm = c.algorithm;
+    s.width = ref.width;
+    s.height = ref.height;
+    s.samplesPerPixel = s.mutationsPerPixel = c.perPixel;
+    s.seed = 1000 + k;
+    auto scene = loadScene(kShared + "/scenes/" + c.scene + "/scene.xml", s);
+    RenderJob job(scene, s, "reference");
+    r[k] = renderLocally(job);
+    ASSERT_EQ(r[k].image.width, ref.width);
+    ASSERT_EQ(r[k].image.height, ref.height);
+    EXPECT_EQ(r[k].rejectedSplats, 0);
+  }
+  Image avg(ref.width, ref.height);
+  for (size_t i = 0; i < avg.rgb.size(); ++i) {
+    avg.rgb[i] = 0.5f * (r[0].image.rgb[i] + r[1].image.rgb[i]);
+  }
+  ErrorMetrics m;
+  ASSERT_TRUE(compareImages(avg, ref, &m, &error)) << error;
+  EXPECT_EQ(m.nonFinite, 0);
+  EXPECT_EQ(m.negative, 0);
+
+  // The cap imgcmp.py uses: the reference's 99.9th percentile (over all channel values).
+  std::vector<float> sorted = ref.rgb;
+  std::sort(sorted.begin(), sorted.end());
+  double pos = 0.999 * double(sorted.size() - 1);
+  size_t lo = size_t(pos);
+  double cap = sorted[lo] + (pos - lo) * (sorted[std::min(lo + 1, sorted.size() - 1)] - sorted[lo]);
+  cap = std::max(cap, 1e-6);
+
+  const size_t n = size_t(ref.width) * ref.height;
+  double sum[3] = {0, 0, 0}, refSum[3] = {0, 0, 0}, sumVar[3] = {0, 0, 0};
+  double expectedRelMse = 0;
+  size_t kept = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const float* rp = &ref.rgb[3 * i];
+    bool masked = rp[0] > cap || rp[1] > cap || rp[2] > cap;
+    if (!masked) ++kept;
+    for (int ch = 0; ch < 3; ++ch) {
+      double a = r[0].image.rgb[3 * i + ch], b = r[1].image.rgb[3 * i + ch];
+      double var = (a - b) * (a - b) / 2;  // one render's pixel variance
+      double rv = rp[ch];
+      expectedRelMse += var / 2 / (rv * rv + 0.01);
+      if (masked) continue;
+      sum[ch] += 0.5 * (a + b);
+      refSum[ch] += rv;
+      sumVar[ch] += var / 2;  // of the average
+    }
+  }
+  expectedRelMse /= double(n) * 3;
+  double zRel = 0;
+  if (isMarkovChain(c.algorithm)) {
+    double z = 0.5 * (r[0].bootstrap.normalization + r[1].bootstrap.normalization);
+    double se = 0.5 * std::hypot(r[0].bootstrap.normalizationStdError,
+                                 r[1].bootstrap.normalizationStdError);
+    zRel = se / z;
+  }
+  double mean[3], refMean[3];
+  for (int ch = 0; ch < 3; ++ch) {
+    mean[ch] = sum[ch] / double(kept);
+    refMean[ch] = refSum[ch] / double(kept);
+    double se = std::sqrt(sumVar[ch]) / double(kept);
+    se = std::hypot(se, mean[ch] * zRel);
+    EXPECT_NEAR(mean[ch], refMean[ch], 4 * se)
+        << c.scene << " " << algorithmName(c.algorithm) << " channel " << ch << " (standard error "
+        << se << ")";
+  }
+  EXPECT_LE(m.relMse, 1.5 * expectedRelMse)
+      << c.scene << " " << algorithmName(c.algorithm) << ": relMSE " << m.relMse
+      << " but the variance explains " << expectedRelMse;
+  std::printf("%s %s: means %.4f %.4f %.4f (ref %.4f %.4f %.4f), relMSE %.4g, expected %.4g\n",
+              c.scene.c_str(), algorithmName(c.algorithm), mean[0], mean[1], mean[2], refMean[0],
+              refMean[1], refMean[2], m.relMse, expectedRelMse);
+}
+
+TEST(Reference, CornellBoxPathTracing) {
+  expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::PathTracing, 8});
+}
+TEST(Reference, CornellBoxBidirectional) {
+  expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::Bidirectional, 4});
+}
+TEST(Reference, CornellBoxPssmlt) {
+  expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::PSSMLT, 4});
+}
+TEST(Reference, VeachMisPathTracing) {
+  expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PathTracing, 16});
+}
+TEST(Reference, VeachMisBidirectional) {
+  expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::Bidirectional, 8});
+}
+TEST(Reference, VeachMisPssmlt) {
+  expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PSSMLT, 8});
+}
+
+}  // namespace
+}  // namespace farm

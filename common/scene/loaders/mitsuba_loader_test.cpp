@@ -1,0 +1,753 @@
+#include "common/scene/loaders/mitsuba_loader.h"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "common/math/transform.h"
+#include "common/scene/film_override.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kShared = FARM_SHARED_DIR;
+
+std::string scenePath(const std::string& name) {
+  return kShared + "/scenes/" + name + "/scene.xml";
+}
+
+void expectNear(const Vec3f& a, const Vec3f& b, float tol) {
+  EXPECT_NEAR(a.x, b.x, tol);
+  EXPECT_NEAR(a.y, b.y, tol);
+  EXPECT_NEAR(a.z, b.z, tol);
+}
+
+Vec3f triangleNormal(const ShapeDescription& s, size_t t) {
+  const Vec3f& a = s.positions[s.indices[3 * t]];
+  const Vec3f& b = s.positions[s.indices[3 * t + 1]];
+  const Vec3f& c = s.positions[s.indices[3 * t + 2]];
+  return cross(b - a, c - a);
+}
+
+// A fresh directory per test for small scene files.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "mitsuba_loader_test_XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string write(const std::string& name, const std::string& text) const {
+    fs::path p = path_ / name;
+    fs::create_directories(p.parent_path());
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// Wraps body lines in a scene; the first body line is line 3 of the file.
+std::string sceneXml(const std::string& body) {
+  return "<?xml version=\"1.0\"?>\n<scene version=\"0.5.0\">\n" + body + "</scene>\n";
+}
+
+// Loads and returns the SceneLoadError's message ("" when it loads).
+std::string loadError(const std::string& path) {
+  try {
+    loadMitsubaScene(path);
+  } catch (const SceneLoadError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// ---- Matrix4 ----
+
+TEST(Matrix4Test, InverseOfComposite) {
+  Matrix4 m = Matrix4::translate({1, -2, 3}) * Matrix4::rotate({1, 2, 3}, 37) *
+              Matrix4::scale({2, 0.5f, 3});
+  Matrix4 p = m * m.inverse();
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) EXPECT_NEAR(p.m[i][j], i == j ? 1.0 : 0.0, 1e-12);
+  Vec3f q{0.3f, -1.7f, 2.2f};
+  expectNear(m.inverse().applyPoint(m.applyPoint(q)), q, 1e-5f);
+}
+
+TEST(Matrix4Test, SingularInverseIsNotFinite) {
+  EXPECT_FALSE(Matrix4::scale({1, 0, 1}).inverse().isFinite());
+  Matrix4 m = Matrix4::identity();
+  m.m[1] = m.m[0];  // two equal rows
+  EXPECT_FALSE(m.inverse().isFinite());
+  EXPECT_TRUE(Matrix4::scale({1e-3f, 1e3f, 1}).inverse().isFinite());
+  // Singular in exact arithmetic, not in floating point elimination.
+  Matrix4 n = Matrix4::identity();
+  const double rows[3][3] = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) n.m[i][j] = rows[i][j] * 0.1;
+  EXPECT_FALSE(n.inverse().isFinite());
+  // Huge translations with tiny scales are fine.
+  Matrix4 far = Matrix4::translate({1e8f, -3e7f, 5e6f}) * Matrix4::scale(Vec3f(1e-7f));
+  Matrix4 farInv = far.inverse();
+  ASSERT_TRUE(farInv.isFinite());
+  // (p - t) / s: entries 1 / s and -t / s (of the float-rounded s and t).
+  EXPECT_NEAR(farInv.m[0][0] * double(1e-7f), 1.0, 1e-12);
+  EXPECT_NEAR(farInv.m[0][3] * double(1e-7f) / -double(1e8f), 1.0, 1e-12);
+}
+
+TEST(Matrix4Test, RotateTranslateScale) {
+  expectNear(Matrix4::rotate({0, 0, 1}, 90).applyVector({1, 0, 0}), {0, 1, 0}, 1e-6f);
+  expectNear(Matrix4::rotate({1, 0, 0}, 90).applyVector({0, 1, 0}), {0, 0, 1}, 1e-6f);
+  expectNear(Matrix4::translate({1, 2, 3}).applyPoint({1, 1, 1}), {2, 3, 4}, 0);
+  expectNear(Matrix4::translate({1, 2, 3}).applyVector({1, 1, 1}), {1, 1, 1}, 0);
+  expectNear(Matrix4::scale({2, 3, 4}).applyPoint({1, 1, 1}), {2, 3, 4}, 0);
+  Matrix4 t = Matrix4::rotate({0, 1, 0}, 30).transpose() * Matrix4::rotate({0, 1, 0}, 30);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(t.m[i][i], 1.0, 1e-12);
+}
+
+TEST(Matrix4Test, ApplyNormalIsInverseTranspose) {
+  Matrix4 m = Matrix4::scale({2, 1, 1});
+  // Not normalized: (M^-1)^T (1, 1, 0) = (0.5, 1, 0).
+  expectNear(m.applyNormal({1, 1, 0}), {0.5f, 1, 0}, 1e-6f);
+  // Stays perpendicular to transformed tangents under a general transform.
+  Matrix4 g = Matrix4::rotate({1, 1, 0}, 20) * Matrix4::scale({3, 0.2f, 1.5f});
+  Vec3f n{0.2f, 0.9f, -0.4f}, t1 = cross(n, {1, 0, 0}), t2 = cross(n, t1);
+  Vec3f nw = g.applyNormal(n);
+  EXPECT_NEAR(dot(nw, g.applyVector(t1)), 0, 1e-5);
+  EXPECT_NEAR(dot(nw, g.applyVector(t2)), 0, 1e-5);
+}
+
+TEST(Matrix4Test, LookAtMitsubaConvention) {
+  Matrix4 m = Matrix4::lookAt({1, 2, 3}, {1, 2, 2}, {0, 1, 0});
+  expectNear(m.applyPoint({0, 0, 0}), {1, 2, 3}, 0);
+  expectNear(m.applyVector({0, 0, 1}), {0, 0, -1}, 1e-6f);  // looks down its +z
+  expectNear(m.applyVector({0, 1, 0}), {0, 1, 0}, 1e-6f);   // +y up
+  expectNear(m.applyVector({1, 0, 0}), {-1, 0, 0}, 1e-6f);  // +x = up x dir
+  EXPECT_FALSE(Matrix4::lookAt({0, 0, 0}, {0, 1, 0}, {0, 1, 0}).isFinite());
+}
+
+// ---- The shared scenes ----
+
+TEST(MitsubaLoaderTest, CornellBox) {
+  SceneDescription s = loadMitsubaScene(scenePath("cornell-box"));
+  EXPECT_EQ(s.sourcePath, scenePath("cornell-box"));
+  ASSERT_EQ(s.shapes.size(), 8u);
+  ASSERT_EQ(s.bsdfs.size(), 8u);
+  EXPECT_EQ(s.maxDepth, 65);
+  EXPECT_FLOAT_EQ(s.camera.fovDegrees, 19.5f);
+  EXPECT_EQ(s.camera.fovAxis, FovAxis::X);
+  EXPECT_EQ(s.camera.width, 1024);
+  EXPECT_EQ(s.camera.height, 1024);
+  EXPECT_EQ(s.camera.filter, FilterType::Tent);
+  expectNear(s.camera.toWorld.applyPoint({0, 0, 0}), {0, 1, 6.8f}, 1e-6f);
+  expectNear(s.camera.toWorld.applyVector({0, 0, 1}), {0, 0, -1}, 1e-6f);
+
+  int emitters = 0;
+  for (const ShapeDescription& shape : s.shapes) {
+    EXPECT_EQ(shape.type, ShapeDescription::Type::TriangleMesh);
+    ASSERT_GE(shape.bsdf, 0);
+    ASSERT_LT(shape.bsdf, 8);
+    EXPECT_TRUE(s.bsdfs[shape.bsdf].twoSided);
+    EXPECT_EQ(s.bsdfs[shape.bsdf].type, BsdfDescription::Type::Diffuse);
+    emitters += shape.isEmitter;
+  }
+  EXPECT_EQ(emitters, 1);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(s.shapes[i].indices.size(), 6u) << i;
+  EXPECT_EQ(s.shapes[5].indices.size(), 36u);
+  EXPECT_EQ(s.shapes[6].indices.size(), 36u);
+  EXPECT_EQ(s.bsdfs[s.shapes[0].bsdf].id, "Floor");
+  expectNear(s.bsdfs[0].reflectance, {0.63f, 0.065f, 0.05f}, 0);  // LeftWall
+  EXPECT_EQ(s.shapes[0].origin, "scene.xml:67 (rectangle)");
+
+  // The light: rectangle with
+  //   [0.235 -1.66e-8 -7.8e-9 -0.005; -2.05e-8 3.9e-9 -0.0893 1.98; 2.05e-8 0.19 8.3e-9 -0.03]
+  // maps local (x, y, 0) to (0.235 x - 0.005, 1.98, 0.19 y - 0.03), up to 1e-7.
+  const ShapeDescription& light = s.shapes[7];
+  ASSERT_TRUE(light.isEmitter);
+  expectNear(light.radiance, {17, 12, 4}, 0);
+  EXPECT_EQ(s.bsdfs[light.bsdf].id, "Light");
+  expectNear(s.bsdfs[light.bsdf].reflectance, Vec3f(0.0f), 0);
+  ASSERT_EQ(light.positions.size(), 4u);
+  const Vec3f expected[4] = {{-0.24f, 1.98f, -0.22f},
+                             {0.23f, 1.98f, -0.22f},
+                             {0.23f, 1.98f, 0.16f},
+                             {-0.24f, 1.98f, 0.16f}};
+  for (const Vec3f& e : expected) {
+    bool found = false;
+    for (const Vec3f& p : light.positions) found |= length(p - e) < 1e-5f;
+    EXPECT_TRUE(found) << e.x << " " << e.y << " " << e.z;
+  }
+  // Its normal: the plane's +z through the inverse transpose points down into the box.
+  ASSERT_EQ(light.normals.size(), 4u);
+  for (const Vec3f& n : light.normals) expectNear(n, {0, -1, 0}, 1e-5f);
+  for (size_t t = 0; t < 2; ++t) EXPECT_GT(dot(triangleNormal(light, t), light.normals[0]), 0);
+}
+
+TEST(MitsubaLoaderTest, CubeHasTwelveOutwardTriangles) {
+  SceneDescription s = loadMitsubaScene(scenePath("cornell-box"));
+  for (int i : {5, 6}) {
+    const ShapeDescription& cube = s.shapes[i];
+    ASSERT_EQ(cube.indices.size(), 36u);
+    EXPECT_TRUE(cube.faceNormals);
+    EXPECT_TRUE(cube.normals.empty());
+    Vec3f center(0.0f);
+    for (const Vec3f& p : cube.positions) center += p;
+    center /= float(cube.positions.size());
+    for (size_t t = 0; t < 12; ++t) {
+      Vec3f c = (cube.positions[cube.indices[3 * t]] + cube.positions[cube.indices[3 * t + 1]] +
+                 cube.positions[cube.indices[3 * t + 2]]) /
+                3.0f;
+      EXPECT_GT(dot(triangleNormal(cube, t), c - center), 0) << "cube " << i << " triangle " << t;
+    }
+  }
+  // The short box's toWorld maps the local corner (1, 1, 1) to the sum of its columns.
+  const Matrix4 shortBox = [] {
+    Matrix4 m = Matrix4::identity();
+    const double v[12] = {0.0851643, 0.289542, 1.31134e-008, 0.328631,  3.72265e-009, 1.26563e-008,
+                          -0.3,      0.3,      -0.284951,    0.0865363, 5.73206e-016, 0.374592};
+    for (int k = 0; k < 12; ++k) m.m[k / 4][k % 4] = v[k];
+    return m;
+  }();
+  Vec3f corner = shortBox.applyPoint({1, 1, 1});
+  bool found = false;
+  for (const Vec3f& p : s.shapes[5].positions) found |= length(p - corner) < 1e-6f;
+  EXPECT_TRUE(found);
+}
+
+TEST(MitsubaLoaderTest, VeachMis) {
+  SceneDescription s = loadMitsubaScene(scenePath("veach-mis"));
+  EXPECT_EQ(s.shapes.size(), 9u);
+  EXPECT_EQ(s.bsdfs.size(), 6u);
+  EXPECT_EQ(s.maxDepth, 3);
+  EXPECT_EQ(s.camera.width, 1280);
+  EXPECT_EQ(s.camera.height, 720);
+  EXPECT_FLOAT_EQ(s.camera.fovDegrees, 35.0f);
+  struct Expected {
+    Vec3f center;
+    float radius, radiance;
+  };
+  const Expected spheres[3] = {
+      {{0, 6.5f, -2.8f}, 1.0f, 7.59909f},
+      {{0, 6.5f, 0}, 0.5f, 30.3964f},
+      {{0, 6.5f, 2.7f}, 0.05f, 3039.64f},
+  };
+  int found = 0;
+  for (const ShapeDescription& shape : s.shapes) {
+    if (shape.type != ShapeDescription::Type::Sphere) continue;
+    ASSERT_LT(found, 3);
+    const Expected& e = spheres[found++];
+    expectNear(shape.center, e.center, 1e-6f);
+    EXPECT_FLOAT_EQ(shape.radius, e.radius);
+    EXPECT_TRUE(shape.isEmitter);
+    expectNear(shape.radiance, Vec3f(e.radiance), 0);
+    EXPECT_FALSE(shape.flipNormals);
+    EXPECT_EQ(s.bsdfs[shape.bsdf].id, "Null");
+  }
+  EXPECT_EQ(found, 3);
+  const BsdfDescription& smooth = s.bsdfs[s.shapes[0].bsdf];
+  EXPECT_EQ(smooth.id, "Smooth");
+  EXPECT_EQ(smooth.type, BsdfDescription::Type::RoughConductor);
+  EXPECT_EQ(smooth.distribution, MicrofacetDistribution::Beckmann);
+  EXPECT_FLOAT_EQ(smooth.alpha, 0.01f);
+  EXPECT_FLOAT_EQ(smooth.extEta, 1.0f);
+  expectNear(smooth.eta, {0.200438f, 0.924033f, 1.10221f}, 0);
+  expectNear(smooth.k, {3.91295f, 2.45285f, 2.14219f}, 0);
+  expectNear(smooth.specularReflectance, Vec3f(0.3f), 0);
+  EXPECT_TRUE(smooth.twoSided);
+}
+
+TEST(MitsubaLoaderTest, VeachBidirObjMeshes) {
+  SceneDescription s = loadMitsubaScene(scenePath("veach-bidir"));
+  ASSERT_EQ(s.shapes.size(), 14u);
+  EXPECT_EQ(s.bsdfs.size(), 4u);
+  EXPECT_EQ(s.maxDepth, 7);
+  int objs = 0, emitters = 0;
+  for (const ShapeDescription& shape : s.shapes) {
+    EXPECT_EQ(shape.type, ShapeDescription::Type::TriangleMesh);
+    EXPECT_GT(shape.indices.size(), 0u);
+    EXPECT_EQ(shape.indices.size() % 3, 0u);
+    for (uint32_t i : shape.indices) ASSERT_LT(i, shape.positions.size());
+    if (shape.faceNormals) {
+      EXPECT_TRUE(shape.normals.empty());
+    } else {
+      EXPECT_EQ(shape.normals.size(), shape.positions.size()) << shape.origin;
+    }
+    objs += shape.origin.find("(obj models/") != std::string::npos;
+    emitters += shape.isEmitter;
+  }
+  EXPECT_EQ(objs, 12);
+  EXPECT_EQ(emitters, 2);
+  // Mesh007 (first shape): 128 triangles, faceNormals.
+  EXPECT_EQ(s.shapes[0].indices.size(), 3u * 128);
+  EXPECT_TRUE(s.shapes[0].faceNormals);
+  EXPECT_EQ(s.shapes[0].origin, "scene.xml:51 (obj models/Mesh007.obj)");
+  // Mesh002, the glass: 7936 triangles with the file's vertex normals.
+  const ShapeDescription& glass = s.shapes[7];
+  EXPECT_EQ(glass.indices.size(), 3u * 7936);
+  EXPECT_FALSE(glass.faceNormals);
+  const BsdfDescription& g = s.bsdfs[glass.bsdf];
+  EXPECT_EQ(g.type, BsdfDescription::Type::Dielectric);
+  EXPECT_FLOAT_EQ(g.intIOR, 1.5f);
+  EXPECT_FLOAT_EQ(g.extIOR, 1.0f);
+  EXPECT_FALSE(g.twoSided);
+  for (const Vec3f& n : glass.normals) EXPECT_NEAR(length(n), 1.0f, 1e-5f);
+}
+
+TEST(MitsubaLoaderTest, WaterCausticObjTransformed) {
+  SceneDescription s = loadMitsubaScene(scenePath("water-caustic"));
+  ASSERT_EQ(s.shapes.size(), 10u);
+  EXPECT_EQ(s.bsdfs.size(), 9u);
+  EXPECT_EQ(s.maxDepth, 9);
+  const ShapeDescription& surface = s.shapes[8];  // models/Mesh001.obj
+  const ShapeDescription& pool = s.shapes[9];     // models/Mesh000.obj, faceNormals
+  EXPECT_EQ(surface.indices.size(), 3u * 102938);
+  EXPECT_EQ(pool.indices.size(), 3u * 513);
+  EXPECT_TRUE(pool.faceNormals);
+  EXPECT_FALSE(surface.faceNormals);
+  EXPECT_EQ(s.bsdfs[surface.bsdf].type, BsdfDescription::Type::Dielectric);
+  EXPECT_FLOAT_EQ(s.bsdfs[surface.bsdf].intIOR, 1.8f);
+  // The first vertex of the first face is the file's first "v", scaled by toWorld = diag(1, 1.5,
+  // 1).
+  std::ifstream obj(kShared + "/scenes/water-caustic/models/Mesh000.obj");
+  std::string line;
+  while (std::getline(obj, line) && line.rfind("v ", 0) != 0) {
+  }
+  float x, y, z;
+  ASSERT_EQ(sscanf(line.c_str(), "v %f %f %f", &x, &y, &z), 3);
+  expectNear(pool.positions[0], {x, 1.5f * y, z}, 1e-6f);
+  // The light is tiny and very bright.
+  EXPECT_TRUE(s.shapes[7].isEmitter);
+  expectNear(s.shapes[7].radiance, {541127, 381972, 127324}, 0);
+}
+
+TEST(MitsubaLoaderTest, ObjPathRelativeToXmlNotCwd) {
+  TempDir dir;
+  dir.write("sub/models/tri.obj",
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");  // a quad: 2 triangles
+  std::string xml = dir.write("sub/scene.xml", sceneXml(R"(<shape type="obj">
+  <string name="filename" value="models/tri.obj"/>
+  <transform name="toWorld"><translate x="10"/></transform>
+</shape>
+)"));
+  fs::path old = fs::current_path();
+  fs::current_path(dir.path());
+  SceneDescription s;
+  EXPECT_NO_THROW(s = loadMitsubaScene(xml));
+  fs::current_path(old);
+  ASSERT_EQ(s.shapes.size(), 1u);
+  EXPECT_EQ(s.shapes[0].indices.size(), 6u);
+  expectNear(s.shapes[0].positions[0], {10, 0, 0}, 0);
+  // No normals in the file and not faceNormals: smooth normals are computed, as Mitsuba does.
+  ASSERT_EQ(s.shapes[0].normals.size(), 4u);
+  for (const Vec3f& n : s.shapes[0].normals) expectNear(n, {0, 0, 1}, 1e-6f);
+  // No bsdf given: a default diffuse 0.5 of its own.
+  ASSERT_EQ(s.bsdfs.size(), 1u);
+  EXPECT_EQ(s.shapes[0].bsdf, 0);
+  expectNear(s.bsdfs[0].reflectance, Vec3f(0.5f), 0);
+  EXPECT_EQ(s.bsdfs[0].type, BsdfDescription::Type::Diffuse);
+}
+
+// ---- Features of small scenes ----
+
+TEST(MitsubaLoaderTest, TransformOperationsComposeInOrder) {
+  TempDir dir;
+  std::string xml = dir.write("s.xml", sceneXml(R"(<shape type="rectangle">
+  <transform name="toWorld">
+    <scale x="2" y="3"/>
+    <rotate z="1" angle="90"/>
+    <translate x="1"/>
+  </transform>
+  <boolean name="flipNormals" value="true"/>
+</shape>
+<shape type="sphere">
+  <point name="center" x="1" y="0" z="0"/>
+  <float name="radius" value="0.5"/>
+  <transform name="toWorld"><scale value="2"/><translate y="1"/></transform>
+</shape>
+)"));
+  SceneDescription s = loadMitsubaScene(xml);
+  ASSERT_EQ(s.shapes.size(), 2u);
+  // (1, 1, 0) -> scale (2, 3, 0) -> rotate (-3, 2, 0) -> translate (-2, 2, 0).
+  const ShapeDescription& r = s.shapes[0];
+  bool found = false;
+  for (const Vec3f& p : r.positions) found |= length(p - Vec3f(-2, 2, 0)) < 1e-5f;
+  EXPECT_TRUE(found);
+  for (const Vec3f& n : r.normals) expectNear(n, {0, 0, -1}, 1e-6f);  // flipped
+  EXPECT_LT(triangleNormal(r, 0).z, 0);
+  EXPECT_EQ(s.shapes[1].type, ShapeDescription::Type::Sphere);
+  expectNear(s.shapes[1].center, {2, 1, 0}, 1e-6f);
+  EXPECT_FLOAT_EQ(s.shapes[1].radius, 1.0f);
+}
+
+TEST(MitsubaLoaderTest, MirroringTransformKeepsOrientation) {
+  TempDir dir;
+  std::string xml = dir.write("s.xml", sceneXml(R"(<shape type="rectangle">
+  <transform name="toWorld"><scale x="-1"/></transform>
+</shape>
+<shape type="cube"><transform name="toWorld"><scale x="-1"/></transform></shape>
+)"));
+  SceneDescription s = loadMitsubaScene(xml);
+  EXPECT_GT(triangleNormal(s.shapes[0], 0).z, 0);
+  expectNear(s.shapes[0].normals[0], {0, 0, 1}, 0);
+  for (size_t t = 0; t < 12; ++t) {
+    const ShapeDescription& c = s.shapes[1];
+    Vec3f centroid = c.positions[c.indices[3 * t]] + c.positions[c.indices[3 * t + 1]] +
+                     c.positions[c.indices[3 * t + 2]];
+    EXPECT_GT(dot(triangleNormal(c, t), centroid), 0);
+  }
+}
+
+TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
+  TempDir dir;
+  std::string xml = dir.write("s.xml", sceneXml(R"(<integrator type="path"/>
+<sensor type="perspective">
+  <float name="fov" value="40"/>
+  <string name="fovAxis" value="smaller"/>
+  <transform name="toWorld"><lookat origin="0, 0, 5" target="0 0 0" up="0, 1, 0"/></transform>
+  <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="32"/>
+    <rfilter type="box"/></film>
+</sensor>
+<bsdf type="dielectric" id="w"><string name="intIOR" value="water"/></bsdf>
+<bsdf type="roughconductor" id="c">
+  <string name="distribution" value="ggx"/>
+  <float name="alphaU" value="0.00001"/><float name="alphaV" value="0.00001"/>
+</bsdf>
+<bsdf type="twosided" id="t"><ref id="w"/></bsdf>
+<bsdf type="diffuse" id="d"><spectrum name="reflectance" value="0.25"/></bsdf>
+<bsdf type="diffuse" id="e"><float name="reflectance" value="0.75"/></bsdf>
+<bsdf type="diffuse" id="f"><rgb name="reflectance" value="0.1 0.2 0.3"/></bsdf>
+)"));
+  SceneDescription s = loadMitsubaScene(xml);
+  EXPECT_EQ(s.maxDepth, -1);
+  EXPECT_EQ(s.camera.fovAxis, FovAxis::Smaller);
+  EXPECT_EQ(s.camera.width, 64);
+  EXPECT_EQ(s.camera.height, 32);
+  EXPECT_EQ(s.camera.filter, FilterType::Box);
+  expectNear(s.camera.toWorld.applyVector({0, 0, 1}), {0, 0, -1}, 1e-6f);
+  expectNear(s.camera.toWorld.applyPoint({0, 0, 0}), {0, 0, 5}, 0);
+  ASSERT_EQ(s.bsdfs.size(), 6u);
+  EXPECT_FLOAT_EQ(s.bsdfs[0].intIOR, 1.333f);
+  EXPECT_FLOAT_EQ(s.bsdfs[0].extIOR, 1.000277f);
+  EXPECT_EQ(s.bsdfs[1].distribution, MicrofacetDistribution::GGX);
+  EXPECT_FLOAT_EQ(s.bsdfs[1].alpha, 1e-4f);                         // clamped up
+  expectNear(s.bsdfs[1].eta, {0.200438f, 0.924033f, 1.10221f}, 0);  // copper by default
+  EXPECT_TRUE(s.bsdfs[2].twoSided);
+  EXPECT_EQ(s.bsdfs[2].type, BsdfDescription::Type::Dielectric);
+  EXPECT_EQ(s.bsdfs[2].id, "t");
+  expectNear(s.bsdfs[3].reflectance, Vec3f(0.25f), 0);
+  expectNear(s.bsdfs[4].reflectance, Vec3f(0.75f), 0);
+  expectNear(s.bsdfs[5].reflectance, {0.1f, 0.2f, 0.3f}, 0);
+}
+
+// ---- Errors ----
+
+TEST(MitsubaLoaderErrorTest, MissingFile) {
+  std::string msg = loadError("/nonexistent/dir/scene.xml");
+  EXPECT_NE(msg.find("/nonexistent/dir/scene.xml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("not found"), std::string::npos) << msg;
+}
+
+TEST(MitsubaLoaderErrorTest, MalformedXmlNamesFileAndLine) {
+  TempDir dir;
+  std::string xml = dir.write("bad.xml", sceneXml(R"(<shape type="rectangle">
+  <float name=radius value="1"/>
+</shape>
+)"));
+  std::string msg = loadError(xml);
+  EXPECT_EQ(msg.rfind(xml + ":4: malformed XML", 0), 0u) << msg;
+
+  std::string unclosed = dir.write("unclosed.xml",
+                                   "<?xml version=\"1.0\"?>\n<scene version=\"0.5.0\">\n"
+                                   "  <shape type=\"cube\">\n");
+  msg = loadError(unclosed);
+  EXPECT_NE(msg.find("unclosed.xml:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("malformed XML"), std::string::npos) << msg;
+}
+
+TEST(MitsubaLoaderErrorTest, MissingMeshNamesObjAndLine) {
+  TempDir dir;
+  std::string xml = dir.write("s.xml", sceneXml(R"(<shape type="obj">
+  <string name="filename" value="models/nothere.obj"/>
+</shape>
+)"));
+  std::string msg = loadError(xml);
+  EXPECT_EQ(msg.rfind(xml + ":4:", 0), 0u) << msg;
+  EXPECT_NE(msg.find("models/nothere.obj"), std::string::npos) << msg;
+}
+
+TEST(MitsubaLoaderErrorTest, UnparseableOrEmptyObj) {
+  TempDir dir;
+  dir.write("empty.obj", "# nothing\nv 0 0 0\n");
+  dir.write("badindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+  std::string msg = loadError(dir.write(
+      "a.xml",
+      sceneXml("<shape type=\"obj\"><string name=\"filename\" value=\"empty.obj\"/></shape>\n")));
+  EXPECT_NE(msg.find(":3:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("no triangles"), std::string::npos) << msg;
+  msg = loadError(dir.write(
+      "b.xml",
+      sceneXml(
+          "<shape type=\"obj\"><string name=\"filename\" value=\"badindex.obj\"/></shape>\n")));
+  EXPECT_NE(msg.find("badindex.obj"), std::string::npos) << msg;
+}
+
+TEST(MitsubaLoaderErrorTest, UnknownTypesNameTypeAndLine) {
+  TempDir dir;
+  std::string msg = loadError(dir.write("a.xml", sceneXml(R"(<bsdf type="fancyplastic" id="x">
+</bsdf>
+)")));
+  EXPECT_EQ(msg.rfind(dir.path().string() + "/a.xml:3:", 0), 0u) << msg;
+  EXPECT_NE(msg.find("fancyplastic"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("b.xml", sceneXml("\n<shape type=\"cylinder\"/>\n")));
+  EXPECT_NE(msg.find("b.xml:4:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cylinder"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("c.xml", sceneXml("<emitter type=\"envmap\"/>\n")));
+  EXPECT_NE(msg.find("c.xml:3:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("envmap"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("d.xml", sceneXml("<sensor type=\"thinlens\"/>\n")));
+  EXPECT_NE(msg.find("thinlens"), std::string::npos) << msg;
+
+  msg = loadError(dir.write(
+      "e.xml",
+      sceneXml("<sensor type=\"perspective\"><film type=\"hdrfilm\">\n<rfilter type=\"gaussian\"/>"
+               "</film></sensor>\n")));
+  EXPECT_NE(msg.find("e.xml:4:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("gaussian"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("f.xml", sceneXml("<shape type=\"cube\">\n<texture type=\"bitmap\"/>"
+                                              "</shape>\n")));
+  EXPECT_NE(msg.find("f.xml:4:"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("g.xml", sceneXml("<blob/>\n")));
+  EXPECT_NE(msg.find("g.xml:3: unknown element <blob>"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("h.xml", sceneXml("<bsdf type=\"roughconductor\"><string "
+                                              "name=\"distribution\" value=\"phong\"/></bsdf>\n")));
+  EXPECT_NE(msg.find("phong"), std::string::npos) << msg;
+
+  msg = loadError(dir.write(
+      "i.xml",
+      sceneXml("<bsdf type=\"diffuse\">\n<float name=\"roughness\" value=\"0.1\"/></bsdf>\n")));
+  EXPECT_NE(msg.find("i.xml:4:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("roughness"), std::string::npos) << msg;
+}
+
+TEST(MitsubaLoaderErrorTest, NonFiniteAndNonNumericParameters) {
+  TempDir dir;
+  struct Case {
+    std::string body, expected;
+  };
+  const Case cases[] = {
+      {"<sensor type=\"perspective\">\n<float name=\"fov\" value=\"nan\"/></sensor>\n", "nan"},
+      {"<sensor type=\"perspective\">\n<float name=\"fov\" value=\"inf\"/></sensor>\n", "inf"},
+      {"<sensor type=\"perspective\">\n<float name=\"fov\" value=\"abc\"/></sensor>\n", "abc"},
+      {"<sensor type=\"perspective\">\n<float name=\"fov\" value=\"1.5x\"/></sensor>\n", "1.5x"},
+      {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"nan, 0, 0\"/></bsdf>\n", "nan"},
+      {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"1e39\"/></bsdf>\n", "1e39"},
+      {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.1, 0.2\"/></bsdf>\n",
+       "reflectance"},
+      {"<bsdf type=\"dielectric\">\n<float name=\"intIOR\" value=\"-1\"/></bsdf>\n", "intIOR"},
+      {"<bsdf type=\"dielectric\">\n<string name=\"intIOR\" value=\"unobtainium\"/></bsdf>\n",
+       "unobtainium"},
+      {"<bsdf type=\"roughconductor\">\n<float name=\"alpha\" value=\"0\"/></bsdf>\n", "alpha"},
+      {"<bsdf type=\"roughconductor\">\n<float name=\"alpha\" value=\"-0.1\"/></bsdf>\n", "alpha"},
+      {"<shape type=\"sphere\">\n<float name=\"radius\" value=\"-1\"/></shape>\n", "radius"},
+      {"<shape type=\"sphere\">\n<float name=\"radius\" value=\"0\"/></shape>\n", "radius"},
+      {"<shape type=\"sphere\">\n<point name=\"center\" x=\"nan\"/></shape>\n", "nan"},
+      {"<sensor type=\"perspective\">\n<float name=\"fov\" value=\"180\"/></sensor>\n", "fov"},
+      {"<sensor type=\"perspective\">\n<float name=\"fov\" value=\"0\"/></sensor>\n", "fov"},
+      {"<sensor type=\"perspective\">\n<string name=\"fovAxis\" value=\"z\"/></sensor>\n",
+       "fovAxis"},
+      {"<shape type=\"cube\"><transform name=\"toWorld\">\n<matrix value=\"1 0 0 0 0 1 0 0 0 0 "
+       "1 0 0 0 0\"/></transform></shape>\n",
+       "16 numbers"},
+      {"<shape type=\"cube\">\n<transform name=\"toWorld\"><matrix value=\"1 0 0 0 0 0 0 0 0 0 "
+       "1 0 0 0 0 1\"/></transform></shape>\n",
+       "singular"},
+      {"<shape type=\"cube\">\n<transform name=\"toWorld\"><scale x=\"0\"/></transform></shape>\n",
+       "singular"},
+      {"<shape type=\"sphere\">\n<transform name=\"toWorld\"><scale "
+       "x=\"2\"/></transform></shape>\n",
+       "non-uniform"},
+      {"<shape type=\"cube\"><emitter type=\"area\">\n<rgb name=\"radiance\" value=\"1, -1, 1\"/>"
+       "</emitter></shape>\n",
+       "negative"},
+      {"<integrator type=\"path\">\n<integer name=\"maxDepth\" value=\"2.5\"/></integrator>\n",
+       "maxDepth"},
+      {"<shape type=\"obj\"><string name=\"filename\" value=\"a.obj\"/>\n"
+       "<boolean name=\"faceNormals\" value=\"maybe\"/></shape>\n",
+       "maybe"},
+  };
+  for (const Case& c : cases) {
+    std::string path = dir.write("p.xml", sceneXml(c.body));
+    std::string msg = loadError(path);
+    EXPECT_EQ(msg.rfind(path + ":4: ", 0), 0u) << c.body << " -> " << msg;
+    EXPECT_NE(msg.find(c.expected), std::string::npos) << c.body << " -> " << msg;
+  }
+}
+
+TEST(MitsubaLoaderErrorTest, References) {
+  TempDir dir;
+  std::string msg = loadError(dir.write("a.xml", sceneXml(R"(<shape type="cube">
+  <ref id="NoSuchBsdf"/>
+</shape>
+)")));
+  EXPECT_NE(msg.find("a.xml:4:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("NoSuchBsdf"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("b.xml", sceneXml(R"(<shape type="cube" id="box"/>
+<shape type="cube">
+  <ref id="box"/>
+</shape>
+)")));
+  EXPECT_NE(msg.find("b.xml:5:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("box"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("<shape>"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("c.xml", sceneXml(R"(<shape type="cube"><ref id="later"/></shape>
+<bsdf type="diffuse" id="later"/>
+)")));
+  EXPECT_NE(msg.find("c.xml:3:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("line 4"), std::string::npos) << msg;
+
+  msg = loadError(dir.write("d.xml", sceneXml(R"(<bsdf type="diffuse" id="x"/>
+<bsdf type="diffuse" id="x"/>
+)")));
+  EXPECT_NE(msg.find("d.xml:4: duplicate id 'x'"), std::string::npos) << msg;
+
+  msg = loadError(
+      dir.write("e.xml", sceneXml(R"(<bsdf type="twosided"><bsdf type="diffuse" id="in"/></bsdf>
+<shape type="cube"><ref id="in"/></shape>
+)")));
+  EXPECT_NE(msg.find("e.xml:4:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("line 3"), std::string::npos) << msg;
+}
+
+TEST(MitsubaLoaderErrorTest, DeepNestingIsRefused) {
+  TempDir dir;
+  std::string body;
+  for (int i = 0; i < 200; ++i) body += "<bsdf type=\"twosided\">";
+  body += "<bsdf type=\"diffuse\"/>";
+  for (int i = 0; i < 200; ++i) body += "</bsdf>";
+  std::string msg = loadError(dir.write("deep.xml", sceneXml(body + "\n")));
+  EXPECT_NE(msg.find("nested too deeply"), std::string::npos) << msg;
+  // A few levels are fine.
+  std::string path = dir.write(
+      "ok.xml",
+      sceneXml("<bsdf type=\"twosided\" id=\"a\"><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/>"
+               "</bsdf></bsdf>\n"));
+  EXPECT_EQ(loadError(path), "");
+}
+
+TEST(MitsubaLoaderErrorTest, AbsurdFilmResolution) {
+  TempDir dir;
+  for (const char* film :
+       {"<integer name=\"width\" value=\"100000\"/>", "<integer name=\"height\" value=\"0\"/>",
+        "<integer name=\"width\" value=\"-5\"/>",
+        "<integer name=\"width\" value=\"40000\"/><integer name=\"height\" value=\"40000\"/>",
+        "<integer name=\"width\" value=\"99999999999999999999\"/>"}) {
+    std::string path = dir.write("f.xml", sceneXml(std::string("<sensor type=\"perspective\">\n"
+                                                               "<film type=\"hdrfilm\">") +
+                                                   film + "</film></sensor>\n"));
+    std::string msg = loadError(path);
+    EXPECT_EQ(msg.rfind(path + ":4: ", 0), 0u) << film << " -> " << msg;
+  }
+}
+
+TEST(MitsubaLoaderErrorTest, VersionAndRoot) {
+  TempDir dir;
+  EXPECT_NE(loadError(dir.write("a.xml", "<scene version=\"3.0.0\"/>")).find("a.xml:1:"),
+            std::string::npos);
+  EXPECT_NE(loadError(dir.write("b.xml", "<notscene version=\"0.5.0\"/>")).find("<scene>"),
+            std::string::npos);
+}
+
+// ---- Film override ----
+
+SceneDescription sceneWithFilm(int w, int h, float fov, FovAxis axis) {
+  SceneDescription s;
+  s.camera.width = w;
+  s.camera.height = h;
+  s.camera.fovDegrees = fov;
+  s.camera.fovAxis = axis;
+  return s;
+}
+
+double degrees(double radians) {
+  return radians * 180.0 / 3.14159265358979323846;
+}
+double halfTan(double deg) {
+  return std::tan(0.5 * deg * 3.14159265358979323846 / 180.0);
+}
+
+TEST(FilmOverrideTest, OneSideFollowsAspect) {
+  SceneDescription s = sceneWithFilm(1280, 720, 35, FovAxis::X);
+  applyFilmOverride(s, 320, 0);
+  EXPECT_EQ(s.camera.width, 320);
+  EXPECT_EQ(s.camera.height, 180);
+  EXPECT_FLOAT_EQ(s.camera.fovDegrees, 35);
+  s = sceneWithFilm(1024, 1024, 19.5f, FovAxis::X);
+  applyFilmOverride(s, 0, 256);
+  EXPECT_EQ(s.camera.width, 256);
+  EXPECT_EQ(s.camera.height, 256);
+  s = sceneWithFilm(1000, 3, 30, FovAxis::X);
+  applyFilmOverride(s, 100, 0);
+  EXPECT_EQ(s.camera.height, 1);  // rounded, at least 1
+  s = sceneWithFilm(640, 480, 30, FovAxis::Y);
+  applyFilmOverride(s, 0, 0);
+  EXPECT_EQ(s.camera.width, 640);
+  EXPECT_EQ(s.camera.fovAxis, FovAxis::Y);
+  applyFilmOverride(s, 320, 240);  // same aspect: nothing to convert
+  EXPECT_EQ(s.camera.fovAxis, FovAxis::Y);
+  EXPECT_FLOAT_EQ(s.camera.fovDegrees, 30);
+}
+
+TEST(FilmOverrideTest, KeepsHorizontalExtent) {
+  // fovAxis y on a 2:1 film: horizontal half-extent = 2 tan(15 deg).
+  SceneDescription s = sceneWithFilm(100, 50, 30, FovAxis::Y);
+  applyFilmOverride(s, 100, 100);
+  EXPECT_EQ(s.camera.fovAxis, FovAxis::X);
+  EXPECT_NEAR(s.camera.fovDegrees, 2 * degrees(std::atan(2 * halfTan(30))), 1e-4);
+  // "smaller" on a 2:1 film is y.
+  s = sceneWithFilm(200, 100, 30, FovAxis::Smaller);
+  applyFilmOverride(s, 50, 100);
+  EXPECT_NEAR(s.camera.fovDegrees, 2 * degrees(std::atan(2 * halfTan(30))), 1e-4);
+  // "larger" on a 2:1 film is x already.
+  s = sceneWithFilm(200, 100, 30, FovAxis::Larger);
+  applyFilmOverride(s, 100, 100);
+  EXPECT_NEAR(s.camera.fovDegrees, 30, 1e-5);
+  EXPECT_EQ(s.camera.fovAxis, FovAxis::X);
+  // Diagonal on 300x400: x half-extent = diagonal half-extent * 300 / 500.
+  s = sceneWithFilm(300, 400, 50, FovAxis::Diagonal);
+  applyFilmOverride(s, 400, 400);
+  EXPECT_NEAR(s.camera.fovDegrees, 2 * degrees(std::atan(0.6 * halfTan(50))), 1e-4);
+  EXPECT_EQ(s.camera.width, 400);
+}
+
+TEST(FilmOverrideTest, RejectsBadSizes) {
+  SceneDescription s = sceneWithFilm(64, 64, 30, FovAxis::X);
+  EXPECT_THROW(applyFilmOverride(s, -1, 0), std::invalid_argument);
+  EXPECT_THROW(applyFilmOverride(s, 70000, 0), std::invalid_argument);
+  EXPECT_THROW(applyFilmOverride(s, 30000, 30000), std::invalid_argument);
+  EXPECT_EQ(s.camera.width, 64);  // unchanged after a refusal
+}
+
+}  // namespace
+}  // namespace farm
