@@ -3,7 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <atomic>
+#include <algorithm>
 #include <cmath>
 
 #include "common/mcmc/primary_sample_sampler.h"
@@ -39,22 +39,18 @@ BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_
                                        int64_t count, const std::function<bool(double)>& progress) {
   BootstrapCandidates out;
   out.contributions.assign(size_t(count), 0.0);
-  std::atomic<int64_t> done{0};
-  std::atomic<bool> cancelled{false};
-  const int64_t grain = 1024;
-  tbb::parallel_for(tbb::blocked_range<int64_t>(0, count, grain),
-                    [&](const tbb::blocked_range<int64_t>& r) {
-                      if (cancelled.load()) return;
-                      for (int64_t i = r.begin(); i < r.end(); ++i) {
-                        out.contributions[size_t(i)] = evaluateCandidate(scene, maxDepth, seed, i);
-                      }
-                      done += r.size();
-                    });
-  // Progress is reported from the calling thread between parallel rounds would complicate the
-  // loop; a single report at the end keeps the bootstrap deterministic and simple.
-  if (progress && !progress(1.0)) {
-    cancelled = true;
-    return BootstrapCandidates();
+  // Rounds of parallel work with a progress report (and a chance to cancel) between them; the
+  // candidates do not depend on the rounds or the threads.
+  const int64_t round = std::max<int64_t>(count / 20, 4096);
+  for (int64_t begin = 0; begin < count; begin += round) {
+    const int64_t end = std::min(count, begin + round);
+    tbb::parallel_for(
+        tbb::blocked_range<int64_t>(begin, end, 256), [&](const tbb::blocked_range<int64_t>& r) {
+          for (int64_t i = r.begin(); i < r.end(); ++i) {
+            out.contributions[size_t(i)] = evaluateCandidate(scene, maxDepth, seed, i);
+          }
+        });
+    if (progress && !progress(double(end) / double(count))) return BootstrapCandidates();
   }
   // Mean and standard error in double, summed in index order: the same on every host.
   double sum = 0, sumSq = 0;

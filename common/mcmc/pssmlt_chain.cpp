@@ -39,6 +39,18 @@ double tracePath(const BidirectionalTracer& tracer, const Camera& camera, Sample
 
 }  // namespace
 
+double seedContributionOf(const Scene& scene, const ChainSpec& spec) {
+  BidirectionalTracer tracer(scene, spec.maxDepth);
+  PrimarySampleSampler sampler(spec.seed, streamId(kChainDomain, spec.chainIndex),
+                               spec.largeStepProbability);
+  sampler.setSeed(spec.seedSample);
+  sampler.setFrozen(true);
+  sampler.startPath();
+  std::vector<Splat> splats;
+  int64_t rejected = 0;
+  return tracePath(tracer, scene.camera(), sampler, &splats, &rejected);
+}
+
 void runPssmltChain(const Scene& scene, const ChainSpec& spec,
                     const std::function<bool(ChainFlush&&)>& onFlush) {
   const Camera& camera = scene.camera();

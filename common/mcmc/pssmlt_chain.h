@@ -12,6 +12,10 @@
 
 namespace farm {
 
+// I(u) of the chain's seed vector, rebuilt here: equals spec.seedContribution when this host
+// computes exactly as the one that ran the bootstrap.
+double seedContributionOf(const Scene& scene, const ChainSpec& spec);
+
 void runPssmltChain(const Scene& scene, const ChainSpec& spec,
                     const std::function<bool(ChainFlush&&)>& onFlush);
 

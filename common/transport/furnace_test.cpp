@@ -67,6 +67,7 @@ void expectFurnace(Algorithm algorithm, int maxDepth) {
   settings.samplesPerPixel = 64;
   settings.mutationsPerPixel = 64;
   settings.seed = 11;
+  settings.bootstrapSamples = 1 << 15;
   RenderJob job(scene, settings, "furnace");
   LocalRenderResult r = renderLocally(job);
   const double D = maxDepth < 0 ? INFINITY : maxDepth;
