@@ -85,6 +85,7 @@ void runPssmltChain(const Scene& scene, const ChainSpec& spec,
   int64_t done = spec.resumeMutations;
   int64_t sinceFlush = 0;
   uint32_t flushIndex = spec.resumeFlushIndex;
+  uint64_t raysAtFlush = 0;
   const int64_t interval = std::max<int64_t>(1, spec.flushInterval);
   auto flush = [&](bool finished) {
     ChainFlush f;
@@ -95,6 +96,8 @@ void runPssmltChain(const Scene& scene, const ChainSpec& spec,
     f.height = camera.height();
     f.splats = film.data();
     f.rejectedSplats = rejected;
+    f.rays = int64_t(tracer.rays() - raysAtFlush);
+    raysAtFlush = tracer.rays();
     f.state = sampler.serialize();
     f.finished = finished;
     film.clear();

@@ -45,6 +45,7 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
   std::vector<Splat> splats;
   int64_t done = spec.resumeMutations, sinceFlush = 0, rejected = 0;
   uint32_t flushIndex = spec.resumeFlushIndex;
+  uint64_t raysAtFlush = 0;
   const int64_t interval = std::max<int64_t>(1, spec.flushInterval);
   while (spec.budget < 0 || done < spec.budget) {
     const int64_t k = spec.firstSample + done;
@@ -83,6 +84,9 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
       f.height = camera.height();
       f.splats = film.data();
       f.rejectedSplats = rejected;
+      uint64_t rays = pt.rays() + bdpt.rays();
+      f.rays = int64_t(rays - raysAtFlush);
+      raysAtFlush = rays;
       f.state = std::to_string(done);
       f.finished = finished;
       film.clear();

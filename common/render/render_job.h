@@ -25,6 +25,7 @@ struct ChainFlush {
   int width = 0, height = 0;
   std::vector<float> splats;   // width*height*3, to be added (in double) to the chain sums
   int64_t rejectedSplats = 0;  // NaN, Inf or negative splats dropped at the source
+  int64_t rays = 0;            // rays traced for this flush's work (for rays per second)
   std::string state;           // chain state after this flush (resume with ChainSpec)
   bool finished = false;       // the chain's budget is spent
 };

@@ -14,7 +14,9 @@ float microfacetD(MicrofacetDistribution dist, float alpha, const Vec3f& m) {
   float c = m.z;
   if (c <= 0) return 0;
   float c2 = c * c;
-  float tan2 = (1 - c2) / c2;
+  // sin^2 from the tangential components: 1 - cos^2 cancels catastrophically in float for the
+  // narrow lobes (alpha down to 1e-4) where theta_m is tiny.
+  float tan2 = (m.x * m.x + m.y * m.y) / c2;
   float a2 = alpha * alpha;
   if (dist == MicrofacetDistribution::Beckmann) {
     // eq. 25
@@ -28,7 +30,7 @@ float microfacetD(MicrofacetDistribution dist, float alpha, const Vec3f& m) {
 // Smith's monodirectional shadowing G1(v, m) (eq. 27 with the rational fit, and eq. 34).
 float smithG1(MicrofacetDistribution dist, float alpha, const Vec3f& v, const Vec3f& m) {
   if (dot(v, m) * v.z <= 0) return 0;
-  float sin2 = std::max(0.0f, 1 - v.z * v.z);
+  float sin2 = v.x * v.x + v.y * v.y;
   if (sin2 == 0) return 1;
   float tanTheta = std::sqrt(sin2) / std::fabs(v.z);
   if (dist == MicrofacetDistribution::Beckmann) {
@@ -49,7 +51,7 @@ Vec3f sampleMicrofacet(MicrofacetDistribution dist, float alpha, float u1, float
     tan2 = alpha * alpha * u1 / (1 - u1);
   }
   float cosTheta = 1 / std::sqrt(1 + tan2);
-  float sinTheta = std::sqrt(std::max(0.0f, 1 - cosTheta * cosTheta));
+  float sinTheta = std::sqrt(tan2) * cosTheta;  // not sqrt(1 - cos^2): see microfacetD
   float phi = 2 * kPi * u2;
   return {sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta};
 }
@@ -191,12 +193,15 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
       if (wi.z <= 0) return false;
       float pdf = microfacetD(desc_.distribution, desc_.alpha, m) * m.z / (4 * womDot);
       if (!(pdf > 0)) return false;
-      Vec3f wiOut = flipped ? Vec3f(wi.x, wi.y, -wi.z) : wi;
-      Vec3f woOut = woIn;
-      Spectrum f = eval(woOut, wiOut, mode);
-      out->wi = wiOut;
+      // The weight f cos / pdf in closed form from the sampled normal m (Walter et al. 2007,
+      // eq. 38): D cancels, so it stays exact where recomputing the half vector from float
+      // directions would not (tiny alpha at grazing angles).
+      float g = smithG1(desc_.distribution, desc_.alpha, wo, m) *
+                smithG1(desc_.distribution, desc_.alpha, wi, m);
+      Spectrum fr = fresnelConductor(womDot, desc_.eta / desc_.extEta, desc_.k / desc_.extEta);
+      out->wi = flipped ? Vec3f(wi.x, wi.y, -wi.z) : wi;
       out->pdf = pdf;
-      out->weight = f * (wi.z / pdf);
+      out->weight = desc_.specularReflectance * fr * (g * womDot / (wo.z * m.z));
       out->delta = false;
       return isValidRadiance(out->weight);
     }
