@@ -1,0 +1,287 @@
+#include "cli/farm_client.h"
+
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "proto/convert.h"
+#include "proto/farm.grpc.pb.h"
+#include "proto/sha256.h"
+#include "proto/wire_limits.h"
+
+namespace farm {
+namespace {
+
+constexpr auto kUnaryDeadline = std::chrono::seconds(15);
+constexpr auto kTransferDeadline = std::chrono::minutes(30);
+
+JobPhase fromProto(v1::JobPhase phase) {
+  switch (phase) {
+    case v1::LOADING_SCENE:
+      return JobPhase::kLoadingScene;
+    case v1::BOOTSTRAPPING:
+      return JobPhase::kBootstrapping;
+    case v1::RENDERING:
+      return JobPhase::kRendering;
+    case v1::FINISHING:
+      return JobPhase::kFinishing;
+    case v1::DONE:
+      return JobPhase::kDone;
+    case v1::FAILED:
+      return JobPhase::kFailed;
+    case v1::CANCELLED:
+      return JobPhase::kCancelled;
+    default:
+      return JobPhase::kSubmitted;
+  }
+}
+
+void fromProto(const v1::JobProgress& m, JobProgress* p) {
+  p->jobId = m.job_id();
+  p->name = m.name();
+  p->error = m.error();
+  p->phase = fromProto(m.phase());
+  p->fraction = m.fraction();
+  p->samplesPerSecond = m.samples_per_second();
+  p->elapsedSeconds = m.elapsed_seconds();
+  p->etaSeconds = m.eta_seconds();
+  p->workDone = m.work_done();
+  p->plannedWork = m.planned_work();
+  p->rejectedSplats = m.rejected_splats();
+  p->rays = m.rays();
+  p->raysPerSecond = m.rays_per_second();
+  p->normalization = m.normalization();
+  p->normalizationStdError = m.normalization_std_error();
+  p->loadSeconds = m.load_seconds();
+  p->bootstrapSeconds = m.bootstrap_seconds();
+  p->renderSeconds = m.render_seconds();
+  p->chainsTotal = m.chains_total();
+  p->chainsFinished = m.chains_finished();
+  p->chainsLeased = m.chains_leased();
+  p->hasReference = m.has_reference();
+  p->errorSeries.clear();
+  for (const v1::ErrorSample& e : m.error_series()) {
+    p->errorSeries.push_back({e.elapsed_seconds(), e.samples(), e.rmse(), e.relmse()});
+  }
+  p->errorSeriesTotal = m.error_series_total();
+  p->width = m.width();
+  p->height = m.height();
+  std::string ignored;
+  farm::fromProto(m.settings(), &p->settings, &ignored);
+}
+
+}  // namespace
+
+struct FarmClient::Impl {
+  std::string address;
+  std::shared_ptr<grpc::Channel> channel;
+  std::unique_ptr<v1::ClientApi::Stub> stub;
+
+  Status fail(const grpc::Status& s) const {
+    switch (s.error_code()) {
+      case grpc::StatusCode::UNAVAILABLE:
+        return {StatusCode::kUnavailable,
+                "cannot reach the coordinator at " + address + " (" + s.error_message() + ")"};
+      case grpc::StatusCode::DEADLINE_EXCEEDED:
+        return {StatusCode::kDeadlineExceeded,
+                "the coordinator at " + address + " did not answer in time"};
+      case grpc::StatusCode::INVALID_ARGUMENT:
+        return {StatusCode::kInvalidArgument, s.error_message()};
+      case grpc::StatusCode::NOT_FOUND:
+        return {StatusCode::kNotFound, s.error_message()};
+      case grpc::StatusCode::FAILED_PRECONDITION:
+        return {StatusCode::kFailedPrecondition, s.error_message()};
+      case grpc::StatusCode::DATA_LOSS:
+        return {StatusCode::kDataLoss, s.error_message()};
+      default:
+        return {StatusCode::kInternal, "coordinator at " + address + ": " + s.error_message()};
+    }
+  }
+};
+
+FarmClient::FarmClient(const std::string& address) : impl_(new Impl) {
+  impl_->address = address;
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(kMaxMessageBytes);
+  args.SetMaxSendMessageSize(kMaxMessageBytes);
+  impl_->channel = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+  impl_->stub = v1::ClientApi::NewStub(impl_->channel);
+}
+
+FarmClient::~FarmClient() = default;
+
+Status FarmClient::connect(double seconds) {
+  const auto deadline = std::chrono::system_clock::now() +
+                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                            std::chrono::duration<double>(seconds));
+  if (!impl_->channel->WaitForConnected(deadline)) {
+    return {StatusCode::kUnavailable, "cannot reach the coordinator at " + impl_->address +
+                                          " (is farm-coordinator running there?)"};
+  }
+  return Status::ok();
+}
+
+Status FarmClient::submit(const Submission& submission, std::string* jobId, SubmitStats* stats) {
+  const LocalBundle& bundle = submission.bundle;
+  // Every blob by hash, with where to read it: identical files are sent once.
+  std::map<std::string, std::string> localByHash;
+  v1::SubmitJobRequest first;
+  v1::JobHeader* header = first.mutable_header();
+  *header->mutable_settings() = toProto(submission.settings);
+  header->set_scene_path(bundle.scenePath);
+  header->set_name(submission.name.empty() ? bundle.scenePath : submission.name);
+  for (size_t i = 0; i < bundle.manifest.size(); ++i) {
+    const BundleEntry& e = bundle.manifest[i];
+    v1::BundleFile* f = header->mutable_manifest()->add_files();
+    f->set_path(e.path);
+    f->set_size(e.size);
+    f->set_hash(e.hash);
+    localByHash.emplace(e.hash, bundle.localPaths[i]);
+  }
+  if (!submission.referencePath.empty()) {
+    std::string hash, error;
+    uint64_t size = 0;
+    if (!sha256File(submission.referencePath, &hash, &size, &error)) {
+      return Status::invalidArgument(error);
+    }
+    header->mutable_reference()->set_path("reference.exr");
+    header->mutable_reference()->set_size(size);
+    header->mutable_reference()->set_hash(hash);
+    localByHash.emplace(hash, submission.referencePath);
+  }
+
+  v1::MissingBlobsRequest missingRequest;
+  for (const auto& [hash, path] : localByHash) missingRequest.add_hashes(hash);
+  v1::MissingBlobsResponse missing;
+  {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + kUnaryDeadline);
+    grpc::Status s = impl_->stub->MissingBlobs(&context, missingRequest, &missing);
+    if (!s.ok()) return impl_->fail(s);
+  }
+
+  SubmitStats local;
+  local.filesTotal = localByHash.size();
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + kTransferDeadline);
+  v1::SubmitJobResponse response;
+  auto writer = impl_->stub->SubmitJob(&context, &response);
+  bool open = writer->Write(first);
+  std::string buffer;
+  for (const std::string& hash : missing.missing_hashes()) {
+    auto it = localByHash.find(hash);
+    if (it == localByHash.end() || !open) continue;
+    std::ifstream in(it->second, std::ios::binary);
+    if (!in) return Status::invalidArgument("cannot read '" + it->second + "'");
+    uint64_t offset = 0;
+    for (;;) {
+      buffer.resize(kMaxChunkBytes);
+      in.read(buffer.data(), std::streamsize(buffer.size()));
+      buffer.resize(size_t(in.gcount()));
+      if (buffer.empty()) break;
+      v1::SubmitJobRequest chunk;
+      chunk.mutable_chunk()->set_hash(hash);
+      chunk.mutable_chunk()->set_offset(offset);
+      chunk.mutable_chunk()->set_data(buffer);
+      offset += buffer.size();
+      if (!(open = writer->Write(chunk))) break;
+    }
+    ++local.filesUploaded;
+    local.bytesUploaded += offset;
+  }
+  writer->WritesDone();
+  grpc::Status s = writer->Finish();
+  if (!s.ok()) return impl_->fail(s);
+  *jobId = response.job_id();
+  local.bundleHash = response.bundle_hash();
+  if (stats) *stats = local;
+  return Status::ok();
+}
+
+Status FarmClient::progress(const std::string& jobId, uint32_t errorSeriesFrom, JobProgress* out) {
+  v1::GetProgressRequest request;
+  request.set_job_id(jobId);
+  request.set_error_series_from(errorSeriesFrom);
+  v1::JobProgress response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + kUnaryDeadline);
+  grpc::Status s = impl_->stub->GetProgress(&context, request, &response);
+  if (!s.ok()) return impl_->fail(s);
+  fromProto(response, out);
+  return Status::ok();
+}
+
+Status FarmClient::fetchImage(const std::string& jobId, bool wait, const std::string& path) {
+  v1::FetchImageRequest request;
+  request.set_job_id(jobId);
+  request.set_wait(wait);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + kTransferDeadline);
+  auto reader = impl_->stub->FetchImage(&context, request);
+  const std::string partial = path + ".partial";
+  std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+  if (!out) return Status::invalidArgument("cannot write '" + partial + "'");
+  v1::ImageChunk chunk;
+  uint64_t received = 0, total = 0;
+  bool ordered = true;
+  while (reader->Read(&chunk)) {
+    if (chunk.offset() != received) ordered = false;
+    out.write(chunk.data().data(), std::streamsize(chunk.data().size()));
+    received += chunk.data().size();
+    total = chunk.total_size();
+  }
+  grpc::Status s = reader->Finish();
+  out.close();
+  if (!s.ok() || !ordered || received != total || !out) {
+    std::remove(partial.c_str());
+    if (!s.ok()) return impl_->fail(s);
+    if (!out) return Status::invalidArgument("cannot write '" + path + "'");
+    return Status::internal("the image arrived incomplete (" + std::to_string(received) + " of " +
+                            std::to_string(total) + " bytes)");
+  }
+  if (std::rename(partial.c_str(), path.c_str()) != 0) {
+    std::remove(partial.c_str());
+    return Status::invalidArgument("cannot write '" + path + "'");
+  }
+  return Status::ok();
+}
+
+Status FarmClient::cancel(const std::string& jobId, JobPhase* phase) {
+  v1::CancelJobRequest request;
+  request.set_job_id(jobId);
+  v1::CancelJobResponse response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + kUnaryDeadline);
+  grpc::Status s = impl_->stub->CancelJob(&context, request, &response);
+  if (!s.ok()) return impl_->fail(s);
+  if (phase) *phase = fromProto(response.phase());
+  return Status::ok();
+}
+
+Status FarmClient::list(std::vector<JobProgress>* jobs) {
+  v1::ListJobsResponse response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + kUnaryDeadline);
+  grpc::Status s = impl_->stub->ListJobs(&context, v1::ListJobsRequest(), &response);
+  if (!s.ok()) return impl_->fail(s);
+  jobs->clear();
+  for (const v1::JobSummary& j : response.jobs()) {
+    JobProgress p;
+    p.jobId = j.job_id();
+    p.phase = fromProto(j.phase());
+    p.fraction = j.fraction();
+    p.name = j.name();
+    std::string ignored;
+    farm::fromProto(j.algorithm(), &p.settings.algorithm, &ignored);
+    p.elapsedSeconds = j.elapsed_seconds();
+    p.error = j.error();
+    jobs->push_back(std::move(p));
+  }
+  return Status::ok();
+}
+
+}  // namespace farm

@@ -1,0 +1,441 @@
+// farm: render a scene in one process, or submit it to a farm-coordinator and follow the job.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <thread>
+
+#include "cli/embedded_render.h"
+#include "cli/farm_client.h"
+#include "cli/render_report.h"
+#include "common/film/image.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using farm::Status;
+
+constexpr int kUsageError = 2;
+constexpr int kFailure = 1;
+
+int fail(const std::string& message, int code = kFailure) {
+  std::cerr << "farm: error: " << message << "\n";
+  return code;
+}
+
+std::atomic<bool> gInterrupted{false};
+extern "C" void onInterrupt(int) {
+  gInterrupted = true;
+}
+
+// --- Render options shared by `render` and `submit`
+
+struct RenderOptions {
+  std::string algorithm = "pssmlt";
+  int64_t spp = 16, mpp = 16;
+  double time = 0;
+  int width = 0, height = 0;
+  std::string seed = "1";  // parsed by hand: CLI11 would wrap "-1" around to 2^64 - 1
+  std::string reference;
+  CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
+};
+
+void addRenderOptions(CLI::App* command, RenderOptions* o) {
+  command->add_option("--algorithm", o->algorithm, "pt, bdpt or pssmlt")->default_str("pssmlt");
+  command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt)")->default_str("16");
+  command->add_option("--mpp", o->mpp, "mutations per pixel (pssmlt)")->default_str("16");
+  o->timeOption = command->add_option(
+      "--time", o->time,
+      "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
+      "render until it is spent instead of to --spp/--mpp");
+  o->widthOption = command->add_option(
+      "--width", o->width, "film width in pixels (default: the scene's; keeps the field of view)");
+  o->heightOption = command->add_option(
+      "--height", o->height,
+      "film height in pixels (default: the scene's, or the width's aspect ratio)");
+  command->add_option("--seed", o->seed, "random seed: same seed and settings, same image")
+      ->type_name("UINT")
+      ->default_str("1");
+  command->add_option("--reference", o->reference,
+                      "reference EXR of the same size: progress and report show RMSE and "
+                      "relative MSE against it");
+}
+
+// Checks the option values with the user's names for them; false with *error otherwise.
+bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* error) {
+  if (!farm::parseAlgorithm(o.algorithm, &s->algorithm)) {
+    *error = "--algorithm must be pt, bdpt or pssmlt, not '" + o.algorithm + "'";
+    return false;
+  }
+  constexpr int64_t kMaxPerPixel = int64_t(1) << 24;
+  if (o.spp < 1 || o.spp > kMaxPerPixel) {
+    *error = "--spp must be between 1 and " + std::to_string(kMaxPerPixel) + ", not " +
+             std::to_string(o.spp);
+    return false;
+  }
+  if (o.mpp < 1 || o.mpp > kMaxPerPixel) {
+    *error = "--mpp must be between 1 and " + std::to_string(kMaxPerPixel) + ", not " +
+             std::to_string(o.mpp);
+    return false;
+  }
+  if (o.timeOption->count() && !(std::isfinite(o.time) && o.time > 0)) {
+    *error = "--time must be a finite number of seconds > 0";
+    return false;
+  }
+  for (auto [option, value, name] : {std::tuple{o.widthOption, o.width, "--width"},
+                                     std::tuple{o.heightOption, o.height, "--height"}}) {
+    if (option->count() && (value < 1 || value > 65536)) {
+      *error =
+          std::string(name) + " must be between 1 and 65536 pixels, not " + std::to_string(value);
+      return false;
+    }
+  }
+  s->samplesPerPixel = o.spp;
+  s->mutationsPerPixel = o.mpp;
+  s->timeBudgetSeconds = o.timeOption->count() ? o.time : 0;
+  s->width = o.width;
+  s->height = o.height;
+  const bool digitsOnly = !o.seed.empty() && o.seed.size() <= 20 &&
+                          o.seed.find_first_not_of("0123456789") == std::string::npos;
+  errno = 0;
+  const unsigned long long seed = digitsOnly ? std::strtoull(o.seed.c_str(), nullptr, 10) : 0;
+  if (!digitsOnly || errno == ERANGE) {
+    *error = "--seed must be a whole number between 0 and 2^64 - 1, not '" + o.seed + "'";
+    return false;
+  }
+  s->seed = seed;
+  std::string problem = s->validate();
+  if (!problem.empty()) {
+    *error = problem;
+    return false;
+  }
+  if (!o.reference.empty() && !fs::is_regular_file(o.reference)) {
+    *error = "reference image '" + o.reference + "' does not exist";
+    return false;
+  }
+  return true;
+}
+
+std::string previewPath(const std::string& exrPath) {
+  fs::path p(exrPath);
+  p.replace_extension(".png");
+  return p.string();
+}
+
+bool checkOutputPath(const std::string& path, std::string* error) {
+  fs::path parent = fs::absolute(path).parent_path();
+  if (!fs::is_directory(parent)) {
+    *error = "cannot write '" + path + "': directory '" + parent.string() + "' does not exist";
+    return false;
+  }
+  if (access(parent.c_str(), W_OK) != 0) {
+    *error = "cannot write '" + path + "': directory '" + parent.string() + "' is not writable";
+    return false;
+  }
+  return true;
+}
+
+// Draws progress on stderr: in place on a terminal, every few seconds otherwise (logs).
+class ProgressDisplay {
+ public:
+  ProgressDisplay() : tty_(isatty(STDERR_FILENO)) {}
+  void show(const farm::JobProgress& p) {
+    if (!p.errorSeries.empty()) lastError_ = p.errorSeries.back();
+    farm::JobProgress shown = p;
+    if (shown.errorSeries.empty() && lastError_) shown.errorSeries.push_back(*lastError_);
+    const auto now = std::chrono::steady_clock::now();
+    if (tty_) {
+      std::cerr << "\r" << farm::progressLine(shown) << "\033[K" << std::flush;
+      drawn_ = true;
+    } else if (now - lastLine_ > std::chrono::seconds(5) || p.phase == farm::JobPhase::kDone) {
+      std::cerr << farm::progressLine(shown) << "\n";
+      lastLine_ = now;
+    }
+  }
+  void finish() {
+    if (tty_ && drawn_) std::cerr << "\n";
+    drawn_ = false;
+  }
+
+ private:
+  bool tty_;
+  bool drawn_ = false;
+  std::optional<farm::ErrorSample> lastError_;
+  std::chrono::steady_clock::time_point lastLine_{};
+};
+
+// --- Subcommands
+
+int runRender(const std::string& scene, const std::string& output, const RenderOptions& options,
+              int threads, int workers, const std::string& reportDir) {
+  farm::EmbeddedRenderOptions render;
+  std::string error;
+  if (!toSettings(options, &render.settings, &error)) return fail(error, kUsageError);
+  if (!fs::is_regular_file(scene)) return fail("scene file '" + scene + "' does not exist");
+  if (!checkOutputPath(output, &error)) return fail(error, kUsageError);
+  if (workers > threads) {
+    return fail("--workers (" + std::to_string(workers) + ") must not exceed --threads (" +
+                    std::to_string(threads) + ")",
+                kUsageError);
+  }
+  if (!reportDir.empty()) {
+    std::error_code ec;
+    fs::create_directories(reportDir, ec);
+    if (ec) return fail("cannot create report directory '" + reportDir + "': " + ec.message());
+  }
+  render.scenePath = scene;
+  render.referencePath = options.reference;
+  render.threads = threads;
+  render.workers = workers;
+  ProgressDisplay display;
+  render.onProgress = [&](const farm::JobProgress& p) { display.show(p); };
+  render.interrupted = &gInterrupted;
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
+
+  farm::EmbeddedRenderResult result;
+  Status status = farm::renderEmbedded(render, &result);
+  display.finish();
+  if (!status.isOk()) return fail(status.message());
+
+  if (!farm::writeExr(output, result.image, result.metadata, &error)) return fail(error);
+  const std::string png = previewPath(output);
+  if (!farm::writePreview(png, result.image, &error)) return fail(error);
+  std::cout << farm::finalReport(result.progress, scene, options.reference);
+  std::cout << "  wrote " << output << " and " << png << "\n";
+  if (!reportDir.empty()) {
+    if (!farm::writeReportDir(reportDir, result.progress, scene, output, options.reference,
+                              &error)) {
+      return fail(error);
+    }
+    std::cout << "  wrote " << (fs::path(reportDir) / "error_vs_time.csv").string() << " and "
+              << (fs::path(reportDir) / "report.json").string() << "\n";
+  }
+  return 0;
+}
+
+int connectTo(farm::FarmClient& client) {
+  Status s = client.connect(5);
+  if (!s.isOk()) return fail(s.message());
+  return 0;
+}
+
+int runSubmit(const std::string& address, const std::string& scene, const RenderOptions& options) {
+  farm::Submission submission;
+  std::string error;
+  if (!toSettings(options, &submission.settings, &error)) return fail(error, kUsageError);
+  if (!fs::is_regular_file(scene)) return fail("scene file '" + scene + "' does not exist");
+  if (!farm::collectSceneBundle(scene, &submission.bundle, &error,
+                                [](const std::string& w) { std::cerr << "farm: " << w << "\n"; })) {
+    return fail(error);
+  }
+  submission.referencePath = options.reference;
+  submission.name = fs::path(scene).filename().string();
+  farm::FarmClient client(address);
+  if (int rc = connectTo(client)) return rc;
+  std::string jobId;
+  farm::SubmitStats stats;
+  Status s = client.submit(submission, &jobId, &stats);
+  if (!s.isOk()) return fail(s.message());
+  std::cerr << "farm: uploaded " << stats.filesUploaded << " of " << stats.filesTotal << " files ("
+            << stats.bytesUploaded << " bytes; the rest were on the coordinator)\n";
+  std::cout << jobId << std::endl;  // the last line of stdout: scripts read it
+  return 0;
+}
+
+// Progress with the latest error sample only (the whole series can be long).
+Status latestProgress(farm::FarmClient& client, const std::string& job, farm::JobProgress* p) {
+  Status s = client.progress(job, UINT32_MAX, p);
+  if (s.isOk() && p->errorSeriesTotal > 0) s = client.progress(job, p->errorSeriesTotal - 1, p);
+  return s;
+}
+
+int runStatus(const std::string& address, const std::string& job, bool json) {
+  farm::FarmClient client(address);
+  if (int rc = connectTo(client)) return rc;
+  farm::JobProgress p;
+  Status s = latestProgress(client, job, &p);
+  if (!s.isOk()) return fail(s.message());
+  if (json) {
+    std::cout << farm::progressJson(p).dump(2) << "\n";
+  } else {
+    std::cout << farm::statusText(p);
+  }
+  return 0;
+}
+
+int runFetch(const std::string& address, const std::string& job, const std::string& output,
+             double timeout) {
+  std::string error;
+  if (!checkOutputPath(output, &error)) return fail(error, kUsageError);
+  farm::FarmClient client(address);
+  if (int rc = connectTo(client)) return rc;
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
+  const auto start = std::chrono::steady_clock::now();
+  ProgressDisplay display;
+  farm::JobProgress p;
+  for (;;) {
+    Status s = latestProgress(client, job, &p);
+    if (!s.isOk()) {
+      display.finish();
+      return fail(s.message());
+    }
+    display.show(p);
+    if (farm::isTerminal(p.phase)) break;
+    if (gInterrupted) {
+      display.finish();
+      return fail("interrupted (the job goes on; fetch it later)");
+    }
+    if (timeout > 0 &&
+        std::chrono::steady_clock::now() - start > std::chrono::duration<double>(timeout)) {
+      display.finish();
+      return fail("job " + job + " is still " + farm::jobPhaseName(p.phase) + " after " +
+                  std::to_string(int(timeout)) + " s");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+  display.finish();
+  if (p.phase == farm::JobPhase::kFailed) return fail("job " + job + " failed: " + p.error);
+  if (p.phase == farm::JobPhase::kCancelled) return fail("job " + job + " was cancelled");
+  Status s = client.fetchImage(job, false, output);
+  if (!s.isOk()) return fail(s.message());
+  farm::Image image;
+  if (!farm::readExr(output, &image, &error)) return fail(error);
+  const std::string png = previewPath(output);
+  if (!farm::writePreview(png, image, &error)) return fail(error);
+  std::cout << farm::finalReport(p, p.name, p.hasReference ? "the reference" : "");
+  std::cout << "  wrote " << output << " and " << png << "\n";
+  return 0;
+}
+
+int runCancel(const std::string& address, const std::string& job) {
+  farm::FarmClient client(address);
+  if (int rc = connectTo(client)) return rc;
+  farm::JobPhase phase;
+  Status s = client.cancel(job, &phase);
+  if (!s.isOk()) return fail(s.message());
+  std::cout << "job " << job << ": " << farm::jobPhaseName(phase) << "\n";
+  return 0;
+}
+
+int runList(const std::string& address) {
+  farm::FarmClient client(address);
+  if (int rc = connectTo(client)) return rc;
+  std::vector<farm::JobProgress> jobs;
+  Status s = client.list(&jobs);
+  if (!s.isOk()) return fail(s.message());
+  if (jobs.empty()) std::cout << "no jobs\n";
+  for (const farm::JobProgress& j : jobs) {
+    char line[512];
+    std::snprintf(line, sizeof(line), "%-20s %-14s %6.1f%%  %-7s %9s  %s", j.jobId.c_str(),
+                  farm::jobPhaseName(j.phase), 100 * j.fraction,
+                  farm::algorithmName(j.settings.algorithm),
+                  farm::formatDuration(j.elapsedSeconds).c_str(), j.name.c_str());
+    std::cout << line;
+    if (!j.error.empty()) std::cout << "  (" << j.error << ")";
+    std::cout << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "farm: a Metropolis light transport render farm. Render a scene in this process "
+      "(render), or submit it to a farm-coordinator and follow the job (submit, status, "
+      "fetch, cancel, list)."};
+  app.require_subcommand(1);
+  const int hardwareThreads = int(std::max(1u, std::thread::hardware_concurrency()));
+
+  // render
+  CLI::App* render = app.add_subcommand(
+      "render",
+      "render SCENE here: coordinator core and local workers in one process; writes OUT.exr, "
+      "a PNG preview beside it (OUT.png) and prints a report");
+  std::string renderScene, renderOutput, reportDir;
+  RenderOptions renderOptions;
+  int threads = hardwareThreads, workers = 1;
+  render->add_option("SCENE", renderScene, "scene file (Mitsuba 0.6 XML)")->required();
+  render->add_option("-o,--output", renderOutput, "output OpenEXR file")->required();
+  addRenderOptions(render, &renderOptions);
+  render->add_option("--threads", threads, "chain threads in all (default: all hardware threads)")
+      ->default_str(std::to_string(hardwareThreads));
+  render
+      ->add_option("--workers", workers,
+                   "local workers sharing the threads (the image does not depend on it)")
+      ->default_str("1");
+  render->add_option("--report", reportDir,
+                     "directory for error_vs_time.csv (elapsed_seconds,samples,rmse,relmse; "
+                     "rows need --reference) and report.json");
+
+  // submit
+  CLI::App* submit = app.add_subcommand(
+      "submit",
+      "upload SCENE's directory tree (files over 256 MiB left out) and start a job; the last "
+      "line of stdout is the job id");
+  std::string address, submitScene;
+  RenderOptions submitOptions;
+  submit->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  submit->add_option("SCENE", submitScene, "scene file (Mitsuba 0.6 XML)")->required();
+  addRenderOptions(submit, &submitOptions);
+
+  // status
+  CLI::App* status = app.add_subcommand(
+      "status", "show a job's phase, fraction done, samples/s, elapsed time, ETA, Z and error");
+  std::string job;
+  bool json = false;
+  status->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  status->add_option("JOB", job, "job id")->required();
+  status->add_flag("--json", json, "print JSON instead of text");
+
+  // fetch
+  CLI::App* fetch = app.add_subcommand(
+      "fetch", "wait until a job is done, then download its image to OUT.exr (and OUT.png)");
+  std::string fetchOutput;
+  double timeout = 0;
+  fetch->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  fetch->add_option("JOB", job, "job id")->required();
+  fetch->add_option("-o,--output", fetchOutput, "output OpenEXR file")->required();
+  fetch->add_option("--timeout", timeout, "give up after this many seconds (default: wait)")
+      ->check(CLI::NonNegativeNumber);
+
+  // cancel, list
+  CLI::App* cancel = app.add_subcommand("cancel", "cancel a job");
+  cancel->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  cancel->add_option("JOB", job, "job id")->required();
+  CLI::App* list = app.add_subcommand("list", "list the coordinator's jobs");
+  list->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    return fail(std::string(e.what()) + " (see farm --help)", kUsageError);
+  }
+
+  if (*render) {
+    if (threads < 1 || threads > 4096)
+      return fail("--threads must be between 1 and 4096", kUsageError);
+    if (workers < 1 || workers > 4096)
+      return fail("--workers must be between 1 and 4096", kUsageError);
+    return runRender(renderScene, renderOutput, renderOptions, threads, workers, reportDir);
+  }
+  if (*submit) return runSubmit(address, submitScene, submitOptions);
+  if (*status) return runStatus(address, job, json);
+  if (*fetch) return runFetch(address, job, fetchOutput, timeout);
+  if (*cancel) return runCancel(address, job);
+  if (*list) return runList(address);
+  return fail("no command given (try --help)", kUsageError);
+}

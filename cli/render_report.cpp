@@ -1,0 +1,228 @@
+#include "cli/render_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace farm {
+namespace {
+
+std::string format(const char* fmt, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), fmt, value);
+  return buffer;
+}
+
+const char* workUnit(const RenderSettings& s) {
+  return isMarkovChain(s.algorithm) ? "mutations" : "samples";
+}
+
+}  // namespace
+
+std::string formatDuration(double seconds) {
+  if (!(seconds >= 0) || !std::isfinite(seconds)) return "--:--";
+  long total = long(std::llround(seconds));
+  char buffer[32];
+  if (total >= 3600) {
+    std::snprintf(buffer, sizeof(buffer), "%ld:%02ld:%02ld", total / 3600, (total / 60) % 60,
+                  total % 60);
+  } else {
+    std::snprintf(buffer, sizeof(buffer), "%ld:%02ld", total / 60, total % 60);
+  }
+  return buffer;
+}
+
+std::string formatCount(double value) {
+  if (value >= 1e9) return format("%.2fG", value / 1e9);
+  if (value >= 1e6) return format("%.2fM", value / 1e6);
+  if (value >= 1e4) return format("%.1fk", value / 1e3);
+  return format("%.0f", value);
+}
+
+std::string progressLine(const JobProgress& p, int barWidth) {
+  std::string line = "[";
+  const int filled = int(p.fraction * barWidth);
+  for (int i = 0; i < barWidth; ++i) line += i < filled ? '=' : (i == filled ? '>' : ' ');
+  line += "] " + format("%5.1f%%", 100 * p.fraction);
+  if (p.phase != JobPhase::kRendering) line += std::string("  ") + jobPhaseName(p.phase);
+  line += "  " + formatCount(p.samplesPerSecond) + " samples/s";
+  line += "  elapsed " + formatDuration(p.elapsedSeconds);
+  line += "  ETA " + formatDuration(p.etaSeconds);
+  if (!p.errorSeries.empty()) {
+    const ErrorSample& e = p.errorSeries.back();
+    line += "  rmse " + format("%.4g", e.rmse) + "  relMSE " + format("%.4g", e.relMse);
+  }
+  return line;
+}
+
+std::string statusText(const JobProgress& p) {
+  std::ostringstream out;
+  out << "job " << p.jobId << ": " << jobPhaseName(p.phase) << ", "
+      << format("%.1f", 100 * p.fraction) << "% done\n";
+  if (!p.error.empty()) out << "  error: " << p.error << "\n";
+  out << "  scene: " << p.name << " (" << algorithmName(p.settings.algorithm);
+  if (p.width > 0) out << ", " << p.width << "x" << p.height;
+  out << ", seed " << p.settings.seed << ")\n";
+  out << "  " << workUnit(p.settings) << ": " << p.workDone;
+  if (p.plannedWork > 0) out << " of " << p.plannedWork;
+  if (p.settings.timeBudgetSeconds > 0) {
+    out << " (time budget " << format("%g", p.settings.timeBudgetSeconds) << " s)";
+  }
+  out << ", " << formatCount(p.samplesPerSecond) << " samples/s, " << formatCount(p.raysPerSecond)
+      << " rays/s\n";
+  out << "  elapsed " << formatDuration(p.elapsedSeconds) << ", ETA "
+      << formatDuration(p.etaSeconds) << "\n";
+  out << "  chains: " << p.chainsFinished << " of " << p.chainsTotal << " finished, "
+      << p.chainsLeased << " running\n";
+  if (isMarkovChain(p.settings.algorithm) && p.normalization > 0) {
+    out << "  Z = " << format("%.6g", p.normalization) << " +- "
+        << format("%.3g", p.normalizationStdError) << " (bootstrap "
+        << format("%.2f", p.bootstrapSeconds) << " s)\n";
+  }
+  if (!p.errorSeries.empty()) {
+    const ErrorSample& e = p.errorSeries.back();
+    out << "  error vs reference: rmse " << format("%.6g", e.rmse) << ", relMSE "
+        << format("%.6g", e.relMse) << " (at " << format("%.1f", e.elapsedSeconds) << " s)\n";
+  } else if (p.hasReference) {
+    out << "  error vs reference: not measured yet\n";
+  }
+  return out.str();
+}
+
+nlohmann::json progressJson(const JobProgress& p) {
+  nlohmann::json j;
+  j["job_id"] = p.jobId;
+  j["phase"] = jobPhaseName(p.phase);
+  j["error"] = p.error;
+  j["name"] = p.name;
+  j["algorithm"] = algorithmName(p.settings.algorithm);
+  j["width"] = p.width;
+  j["height"] = p.height;
+  j["seed"] = p.settings.seed;
+  j["fraction"] = p.fraction;
+  j["work_done"] = p.workDone;
+  j["planned_work"] = p.plannedWork;
+  j["samples_per_second"] = p.samplesPerSecond;
+  j["elapsed_seconds"] = p.elapsedSeconds;
+  j["eta_seconds"] = p.etaSeconds;
+  j["normalization"] = p.normalization;
+  j["normalization_std_error"] = p.normalizationStdError;
+  j["load_seconds"] = p.loadSeconds;
+  j["bootstrap_seconds"] = p.bootstrapSeconds;
+  j["render_seconds"] = p.renderSeconds;
+  j["chains_total"] = p.chainsTotal;
+  j["chains_finished"] = p.chainsFinished;
+  j["chains_leased"] = p.chainsLeased;
+  j["rejected_splats"] = p.rejectedSplats;
+  j["rays"] = p.rays;
+  j["rays_per_second"] = p.raysPerSecond;
+  j["has_reference"] = p.hasReference;
+  if (!p.errorSeries.empty()) {
+    j["rmse"] = p.errorSeries.back().rmse;
+    j["relmse"] = p.errorSeries.back().relMse;
+  } else {
+    j["rmse"] = nullptr;
+    j["relmse"] = nullptr;
+  }
+  return j;
+}
+
+std::string finalReport(const JobProgress& p, const std::string& scene,
+                        const std::string& referencePath) {
+  std::ostringstream out;
+  const RenderSettings& s = p.settings;
+  out << "render: " << scene << ", " << algorithmName(s.algorithm) << ", " << p.width << "x"
+      << p.height << ", seed " << s.seed << "\n";
+  const double pixels = double(p.width) * p.height;
+  if (isMarkovChain(s.algorithm)) {
+    out << "  Z = " << format("%.6g", p.normalization) << " +- "
+        << format("%.3g", p.normalizationStdError) << " (standard error, "
+        << format("%.3g", p.normalization > 0 ? 100 * p.normalizationStdError / p.normalization : 0)
+        << "%)\n";
+  }
+  out << "  " << workUnit(s) << ": " << p.workDone << " ("
+      << format("%.2f", pixels > 0 ? p.workDone / pixels : 0) << " per pixel), "
+      << formatCount(p.samplesPerSecond) << "/s over " << p.chainsTotal << " chains\n";
+  out << "  time: " << format("%.2f", p.elapsedSeconds) << " s total (load "
+      << format("%.2f", p.loadSeconds) << " s, bootstrap " << format("%.2f", p.bootstrapSeconds)
+      << " s = "
+      << format("%.1f", p.elapsedSeconds > 0 ? 100 * p.bootstrapSeconds / p.elapsedSeconds : 0)
+      << "% of the total, rendering " << format("%.2f", p.renderSeconds) << " s)\n";
+  out << "  rays: " << p.rays << " (" << formatCount(p.raysPerSecond)
+      << " rays/s while rendering)\n";
+  if (p.rejectedSplats > 0) {
+    out << "  rejected splats (NaN, Inf or negative): " << p.rejectedSplats << "\n";
+  }
+  if (!p.errorSeries.empty()) {
+    const ErrorSample& e = p.errorSeries.back();
+    out << "  error vs " << referencePath << ": rmse " << format("%.6g", e.rmse) << ", relMSE "
+        << format("%.6g", e.relMse) << "\n";
+  }
+  return out.str();
+}
+
+bool writeReportDir(const std::string& dir, const JobProgress& p, const std::string& scene,
+                    const std::string& output, const std::string& referencePath,
+                    std::string* error) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) {
+    *error = "cannot create report directory '" + dir + "': " + ec.message();
+    return false;
+  }
+  const std::string csvPath = (fs::path(dir) / "error_vs_time.csv").string();
+  std::ofstream csv(csvPath);
+  csv << "elapsed_seconds,samples,rmse,relmse\n";
+  char row[160];
+  for (const ErrorSample& e : p.errorSeries) {
+    std::snprintf(row, sizeof(row), "%.6f,%lld,%.9g,%.9g\n", e.elapsedSeconds, (long long)e.samples,
+                  e.rmse, e.relMse);
+    csv << row;
+  }
+  csv.close();
+  if (!csv) {
+    *error = "cannot write '" + csvPath + "'";
+    return false;
+  }
+
+  nlohmann::json j = progressJson(p);
+  j["scene"] = scene;
+  j["output"] = output;
+  j["reference"] = referencePath.empty() ? nlohmann::json(nullptr) : nlohmann::json(referencePath);
+  j["settings"] = {
+      {"algorithm", algorithmName(p.settings.algorithm)},
+      {"width", p.settings.width},
+      {"height", p.settings.height},
+      {"samples_per_pixel", p.settings.samplesPerPixel},
+      {"mutations_per_pixel", p.settings.mutationsPerPixel},
+      {"time_budget_seconds", p.settings.timeBudgetSeconds},
+      {"seed", p.settings.seed},
+      {"max_depth", p.settings.maxDepth},
+      {"bootstrap_samples", p.settings.bootstrapSamples},
+      {"num_chains", p.settings.numChains},
+      {"large_step_probability", p.settings.largeStepProbability},
+  };
+  j["bootstrap_share"] = p.elapsedSeconds > 0 ? p.bootstrapSeconds / p.elapsedSeconds : 0.0;
+  nlohmann::json series = nlohmann::json::array();
+  for (const ErrorSample& e : p.errorSeries) {
+    series.push_back({{"elapsed_seconds", e.elapsedSeconds},
+                      {"samples", e.samples},
+                      {"rmse", e.rmse},
+                      {"relmse", e.relMse}});
+  }
+  j["error_vs_time"] = series;
+  const std::string jsonPath = (fs::path(dir) / "report.json").string();
+  std::ofstream out(jsonPath);
+  out << j.dump(2) << "\n";
+  out.close();
+  if (!out) {
+    *error = "cannot write '" + jsonPath + "'";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace farm

@@ -1,0 +1,63 @@
+#include "cli/scene_bundle.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "proto/sha256.h"
+#include "proto/wire_limits.h"
+
+namespace farm {
+namespace fs = std::filesystem;
+
+bool collectSceneBundle(const std::string& sceneFile, LocalBundle* bundle, std::string* error,
+                        const std::function<void(const std::string&)>& warn) {
+  std::error_code ec;
+  if (!fs::is_regular_file(sceneFile, ec)) {
+    *error = "scene file '" + sceneFile + "' does not exist or is not a file";
+    return false;
+  }
+  const fs::path scene = fs::absolute(sceneFile, ec);
+  const fs::path root = scene.parent_path();
+  bundle->root = root.string();
+  bundle->scenePath = scene.filename().generic_string();
+
+  std::vector<fs::path> files;
+  for (fs::recursive_directory_iterator it(root, fs::directory_options::skip_permission_denied, ec),
+       end;
+       it != end; it.increment(ec)) {
+    if (ec) break;
+    if (it->is_regular_file(ec)) files.push_back(it->path());
+  }
+  if (ec) {
+    *error = "cannot list the scene directory '" + root.string() + "': " + ec.message();
+    return false;
+  }
+  std::sort(files.begin(), files.end());
+  for (const fs::path& file : files) {
+    const std::string relative = fs::relative(file, root, ec).generic_string();
+    if (ec) continue;
+    const uint64_t size = fs::file_size(file, ec);
+    if (ec) continue;
+    if (size > kMaxBundleFileBytes) {
+      if (warn) {
+        warn("leaving out '" + relative + "' (" + std::to_string(size >> 20) +
+             " MiB, over the 256 MiB limit for bundle files)");
+      }
+      continue;
+    }
+    const std::string problem = checkRelativePath(relative);
+    if (!problem.empty()) {
+      if (warn) warn("leaving out a file: " + problem);
+      continue;
+    }
+    BundleEntry entry;
+    entry.path = relative;
+    if (!sha256File(file.string(), &entry.hash, &entry.size, error)) return false;
+    bundle->totalBytes += entry.size;
+    bundle->manifest.push_back(std::move(entry));
+    bundle->localPaths.push_back(file.string());
+  }
+  return true;
+}
+
+}  // namespace farm

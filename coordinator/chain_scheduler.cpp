@@ -1,0 +1,114 @@
+#include "coordinator/chain_scheduler.h"
+
+namespace farm {
+
+ChainScheduler::ChainScheduler(std::vector<ChainSpec> chains, SteadyClock::duration leaseDuration)
+    : leaseDuration_(leaseDuration) {
+  chains_.reserve(chains.size());
+  for (ChainSpec& spec : chains) {
+    Chain chain;
+    // A plan may come with resume fields set (never today); honour them as the starting point.
+    chain.resumeState = spec.resumeState;
+    chain.mutationsDone = spec.resumeMutations;
+    chain.nextFlushIndex = spec.resumeFlushIndex;
+    chain.spec = std::move(spec);
+    chains_.push_back(std::move(chain));
+  }
+}
+
+std::vector<ChainLease> ChainScheduler::lease(const std::string& worker, int max,
+                                              SteadyClock::time_point now) {
+  std::vector<ChainLease> leases;
+  if (stopping_) return leases;
+  for (Chain& chain : chains_) {
+    if (int(leases.size()) >= max) break;
+    if (chain.state != State::kWaiting) continue;
+    chain.state = State::kLeased;
+    chain.holder = worker;
+    ++chain.epoch;
+    chain.deadline = now + leaseDuration_;
+    ChainLease lease;
+    lease.spec = chain.spec;
+    lease.spec.resumeState = chain.resumeState;
+    lease.spec.resumeMutations = chain.mutationsDone;
+    lease.spec.resumeFlushIndex = chain.nextFlushIndex;
+    lease.epoch = chain.epoch;
+    lease.deadline = chain.deadline;
+    leases.push_back(std::move(lease));
+  }
+  return leases;
+}
+
+bool ChainScheduler::holds(const std::string& worker, uint32_t chain, uint64_t epoch) const {
+  if (chain >= chains_.size()) return false;
+  const Chain& c = chains_[chain];
+  return c.state == State::kLeased && c.holder == worker && c.epoch == epoch;
+}
+
+bool ChainScheduler::renew(const std::string& worker, uint32_t chain, uint64_t epoch,
+                           SteadyClock::time_point now) {
+  if (!holds(worker, chain, epoch)) return false;
+  chains_[chain].deadline = now + leaseDuration_;
+  return true;
+}
+
+void ChainScheduler::recordFlush(uint32_t chain, uint32_t flushIndex, int64_t mutations,
+                                 std::string state, bool finished, const std::string& worker,
+                                 uint64_t epoch, SteadyClock::time_point now) {
+  Chain& c = chains_.at(chain);
+  c.resumeState = std::move(state);
+  c.mutationsDone += mutations;
+  c.nextFlushIndex = flushIndex + 1;
+  if (finished) {
+    finish(c);
+  } else if (holds(worker, chain, epoch)) {
+    c.deadline = now + leaseDuration_;
+  }
+}
+
+void ChainScheduler::finishChain(uint32_t chain) {
+  finish(chains_.at(chain));
+}
+
+void ChainScheduler::finish(Chain& chain) {
+  if (chain.state == State::kFinished) return;
+  chain.state = State::kFinished;
+  chain.holder.clear();
+  ++finished_;
+}
+
+int ChainScheduler::expireLeases(SteadyClock::time_point now) {
+  int expired = 0;
+  for (Chain& chain : chains_) {
+    if (chain.state != State::kLeased || now < chain.deadline) continue;
+    ++expired;
+    if (stopping_) {
+      finish(chain);
+    } else {
+      chain.state = State::kWaiting;
+      chain.holder.clear();
+    }
+  }
+  return expired;
+}
+
+void ChainScheduler::stop() {
+  stopping_ = true;
+  for (Chain& chain : chains_) {
+    if (chain.state == State::kWaiting) finish(chain);
+  }
+}
+
+uint32_t ChainScheduler::leasedCount() const {
+  uint32_t n = 0;
+  for (const Chain& chain : chains_) n += chain.state == State::kLeased;
+  return n;
+}
+
+uint32_t ChainScheduler::waitingCount() const {
+  uint32_t n = 0;
+  for (const Chain& chain : chains_) n += chain.state == State::kWaiting;
+  return n;
+}
+
+}  // namespace farm

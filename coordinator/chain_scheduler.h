@@ -1,0 +1,82 @@
+#pragma once
+// Hands a job's chains to workers under leases. A lease lives for a fixed time unless its holder
+// renews it (an accepted flush or a renewal does); an expired lease puts the chain back in the
+// queue, and whoever leases it next resumes from the last accepted flush's state, so a worker
+// that dies costs at most one flush interval (DESIGN.md, "The work unit").
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/render/chain_spec.h"
+
+namespace farm {
+
+using SteadyClock = std::chrono::steady_clock;
+
+struct ChainLease {
+  ChainSpec spec;      // with the resume fields filled in from the last accepted flush
+  uint64_t epoch = 0;  // lease generation of this chain: an upload names the lease it ran under
+  SteadyClock::time_point deadline;
+};
+
+class ChainScheduler {
+ public:
+  ChainScheduler(std::vector<ChainSpec> chains, SteadyClock::duration leaseDuration);
+
+  uint32_t chainCount() const { return uint32_t(chains_.size()); }
+  bool hasChain(uint32_t chain) const { return chain < chains_.size(); }
+
+  // Leases up to `max` waiting chains (lowest index first) to `worker`.
+  std::vector<ChainLease> lease(const std::string& worker, int max, SteadyClock::time_point now);
+  // True when `worker` holds the chain's current lease `epoch`.
+  bool holds(const std::string& worker, uint32_t chain, uint64_t epoch) const;
+  // Extends a lease its holder still has; false when the lease is gone (expired, moved, done).
+  bool renew(const std::string& worker, uint32_t chain, uint64_t epoch,
+             SteadyClock::time_point now);
+
+  // An accepted flush: the chain's new resume point. A flush marked finished ends the chain.
+  // Extends the lease when (worker, epoch) holds it.
+  void recordFlush(uint32_t chain, uint32_t flushIndex, int64_t mutations, std::string state,
+                   bool finished, const std::string& worker, uint64_t epoch,
+                   SteadyClock::time_point now);
+  // Ends a chain early (the job's time budget is spent and the chain was told to stop).
+  void finishChain(uint32_t chain);
+
+  // Puts chains whose lease expired back in the queue (or, once stopping, ends them). Returns
+  // the number of leases that expired.
+  int expireLeases(SteadyClock::time_point now);
+
+  // No more leases: waiting chains end now, leased ones at their next flush or lease expiry.
+  void stop();
+  bool stopping() const { return stopping_; }
+
+  bool allFinished() const { return finished_ == chains_.size(); }
+  uint32_t finishedCount() const { return uint32_t(finished_); }
+  uint32_t leasedCount() const;
+  uint32_t waitingCount() const;
+  // Mutations (or samples) accepted from the chain so far.
+  int64_t chainMutations(uint32_t chain) const { return chains_.at(chain).mutationsDone; }
+
+ private:
+  enum class State { kWaiting, kLeased, kFinished };
+  struct Chain {
+    ChainSpec spec;
+    State state = State::kWaiting;
+    std::string holder;
+    uint64_t epoch = 0;
+    SteadyClock::time_point deadline;
+    // Resume point: the state after the last accepted flush.
+    std::string resumeState;
+    int64_t mutationsDone = 0;
+    uint32_t nextFlushIndex = 0;
+  };
+  void finish(Chain& chain);
+
+  std::vector<Chain> chains_;
+  SteadyClock::duration leaseDuration_;
+  size_t finished_ = 0;
+  bool stopping_ = false;
+};
+
+}  // namespace farm

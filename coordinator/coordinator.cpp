@@ -1,0 +1,255 @@
+#include "coordinator/coordinator.h"
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+namespace farm {
+namespace fs = std::filesystem;
+
+std::string randomId(const std::string& prefix) {
+  static std::mutex mutex;
+  static std::mt19937_64 rng{std::random_device{}()};
+  std::lock_guard<std::mutex> lock(mutex);
+  static const char* kHex = "0123456789abcdef";
+  uint64_t bits = rng();
+  std::string id = prefix;
+  for (int i = 0; i < 12; ++i, bits >>= 4) id.push_back(kHex[bits & 0xf]);
+  return id;
+}
+
+std::string checkJobSettings(const RenderSettings& s) {
+  if (!std::isfinite(s.timeBudgetSeconds) || s.timeBudgetSeconds < 0) {
+    return "time budget must be a finite number of seconds >= 0";
+  }
+  if (!std::isfinite(s.largeStepProbability) || s.largeStepProbability < 0 ||
+      s.largeStepProbability > 1) {
+    return "large step probability must be in [0, 1]";
+  }
+  return s.validate();
+}
+
+Coordinator::Coordinator(CoordinatorOptions options)
+    : options_(std::move(options)), blobs_(options_.dataDir) {
+  housekeeper_ = std::thread([this] { housekeeping(); });
+}
+
+Coordinator::~Coordinator() {
+  {
+    std::lock_guard<std::mutex> lock(housekeepingMutex_);
+    shuttingDown_ = true;
+  }
+  housekeepingWake_.notify_all();
+  housekeeper_.join();
+  std::vector<std::shared_ptr<Job>> jobs;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs = jobs_;
+  }
+  for (auto& job : jobs) job->cancel();
+}
+
+void Coordinator::housekeeping() {
+  std::unique_lock<std::mutex> lock(housekeepingMutex_);
+  const auto period = std::chrono::duration<double>(options_.tickSeconds);
+  while (!shuttingDown_) {
+    housekeepingWake_.wait_for(lock, period, [this] { return shuttingDown_; });
+    if (shuttingDown_) break;
+    lock.unlock();
+    tick();
+    lock.lock();
+  }
+}
+
+void Coordinator::tick(SteadyClock::time_point now) {
+  std::vector<std::shared_ptr<Job>> jobs;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs = jobs_;
+  }
+  for (auto& job : jobs) job->tick(now);
+}
+
+std::shared_ptr<Job> Coordinator::findJob(const std::string& jobId) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = jobsById_.find(jobId);
+  return it == jobsById_.end() ? nullptr : it->second;
+}
+
+namespace {
+Status unknownJob(const std::string& jobId) {
+  std::string shown = jobId.size() > 80 ? jobId.substr(0, 80) + "..." : jobId;
+  return Status::notFound("unknown job id '" + shown + "'");
+}
+}  // namespace
+
+Status Coordinator::submit(JobSpec spec, std::string* jobId) {
+  std::string problem = checkJobSettings(spec.settings);
+  if (!problem.empty()) return Status::invalidArgument("invalid render settings: " + problem);
+  std::error_code ec;
+  if (!fs::is_regular_file(spec.scenePath, ec)) {
+    return Status::invalidArgument("scene file '" + spec.scenePath + "' does not exist");
+  }
+  if (!spec.referencePath.empty() && !fs::is_regular_file(spec.referencePath, ec)) {
+    return Status::invalidArgument("reference image '" + spec.referencePath + "' does not exist");
+  }
+  std::shared_ptr<Job> job;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::string id;
+    do {
+      id = randomId("job-");
+    } while (jobsById_.count(id));
+    const std::string outputDir = (fs::path(options_.dataDir) / "jobs" / id).string();
+    job = std::make_shared<Job>(id, std::move(spec),
+                                std::chrono::duration_cast<SteadyClock::duration>(
+                                    std::chrono::duration<double>(options_.leaseSeconds)),
+                                outputDir, options_.log);
+    if (options_.log) {
+      options_.log("job " + id + ": submitted (" + job->spec().name + ", " +
+                   algorithmName(job->spec().settings.algorithm) + ")");
+    }
+    jobs_.push_back(job);
+    jobsById_[id] = job;
+    *jobId = id;
+  }
+  job->start();
+  return Status::ok();
+}
+
+Status Coordinator::progress(const std::string& jobId, uint32_t errorSeriesFrom,
+                             JobProgress* out) const {
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  *out = job->progress(errorSeriesFrom);
+  return Status::ok();
+}
+
+Status Coordinator::cancel(const std::string& jobId, JobPhase* phase) {
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  JobPhase after = job->cancel();
+  if (phase) *phase = after;
+  return Status::ok();
+}
+
+std::vector<JobProgress> Coordinator::list() const {
+  std::vector<std::shared_ptr<Job>> jobs;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs = jobs_;
+  }
+  std::vector<JobProgress> out;
+  for (auto& job : jobs) out.push_back(job->progress(UINT32_MAX));
+  return out;
+}
+
+Status Coordinator::imageFile(const std::string& jobId, std::string* path) const {
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  return job->imageFile(path);
+}
+
+Status Coordinator::finalImage(const std::string& jobId, Image* image,
+                               ImageMetadata* metadata) const {
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  return job->finalImage(image, metadata);
+}
+
+Status Coordinator::waitForEnd(const std::string& jobId, SteadyClock::duration timeout,
+                               JobPhase* phase) const {
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  JobPhase p = job->waitForEnd(timeout);
+  if (phase) *phase = p;
+  return Status::ok();
+}
+
+std::shared_ptr<const RenderJob> Coordinator::renderJob(const std::string& jobId) const {
+  auto job = findJob(jobId);
+  return job ? job->renderJob() : nullptr;
+}
+
+Status Coordinator::registerWorker(const WorkerInfo& info, std::string* workerId) {
+  if (info.threads < 1 || info.threads > 4096) {
+    return Status::invalidArgument("worker threads must be in [1, 4096], got " +
+                                   std::to_string(info.threads));
+  }
+  if (info.capabilities.empty()) {
+    return Status::invalidArgument("worker runs no algorithm this coordinator knows");
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::string id;
+  do {
+    id = randomId("worker-");
+  } while (workers_.count(id));
+  workers_[id] = info;
+  *workerId = id;
+  if (options_.log) {
+    options_.log("worker " + id + " registered (" + info.host + ", " +
+                 std::to_string(info.threads) + " threads, " + info.version + ")");
+  }
+  return Status::ok();
+}
+
+Status Coordinator::findWorker(const std::string& workerId, WorkerInfo* info) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = workers_.find(workerId);
+  if (it == workers_.end()) {
+    std::string shown = workerId.size() > 80 ? workerId.substr(0, 80) + "..." : workerId;
+    return Status::notFound("unknown worker id '" + shown +
+                            "' (register first; a restarted coordinator forgets workers)");
+  }
+  if (info) *info = it->second;
+  return Status::ok();
+}
+
+Status Coordinator::leaseChains(const std::string& workerId, int max,
+                                std::vector<WorkerLease>* leases) {
+  WorkerInfo worker;
+  Status status = findWorker(workerId, &worker);
+  if (!status.isOk()) return status;
+  if (max < 1 || max > 4096) {
+    return Status::invalidArgument("max chains must be in [1, 4096], got " + std::to_string(max));
+  }
+  std::vector<std::shared_ptr<Job>> jobs;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs = jobs_;
+  }
+  const auto now = SteadyClock::now();
+  leases->clear();
+  for (auto& job : jobs) {
+    if (int(leases->size()) >= max) break;
+    if (!worker.capabilities.count(job->spec().settings.algorithm)) continue;
+    for (WorkerLease& lease : job->lease(workerId, max - int(leases->size()), now)) {
+      leases->push_back(std::move(lease));
+    }
+  }
+  return Status::ok();
+}
+
+Status Coordinator::renewLeases(const std::string& workerId, const std::vector<LeaseRef>& leases,
+                                std::vector<LeaseRef>* lost) {
+  Status status = findWorker(workerId, nullptr);
+  if (!status.isOk()) return status;
+  const auto now = SteadyClock::now();
+  lost->clear();
+  for (const LeaseRef& ref : leases) {
+    auto job = findJob(ref.jobId);
+    if (!job || !job->renew(workerId, ref.chain, ref.epoch, now)) lost->push_back(ref);
+  }
+  return Status::ok();
+}
+
+Status Coordinator::acceptFlush(const std::string& workerId, const std::string& jobId,
+                                uint64_t epoch, ChainFlush&& flush, FlushAck* ack) {
+  Status status = findWorker(workerId, nullptr);
+  if (!status.isOk()) return status;
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  return job->acceptFlush(workerId, epoch, std::move(flush), SteadyClock::now(), ack);
+}
+
+}  // namespace farm

@@ -1,0 +1,102 @@
+#pragma once
+// The coordinator without the network: jobs, workers and their leases, the scene blob store.
+// The gRPC services (grpc_service.h) and the embedded `farm render` both drive this class, so
+// the pipeline is the same in one process and on a cluster.
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "coordinator/blob_store.h"
+#include "coordinator/job.h"
+#include "coordinator/status.h"
+
+namespace farm {
+
+struct CoordinatorOptions {
+  std::string dataDir;       // blobs, laid-out bundles and final images; created if needed
+  double leaseSeconds = 30;  // a lease lives this long without a flush or renewal
+  double tickSeconds = 0.1;  // how often leases and time budgets are checked
+  std::function<void(const std::string&)> log;  // one line per event worth an operator's eye
+};
+
+struct WorkerInfo {
+  std::string version, host;
+  int threads = 1;
+  std::set<Algorithm> capabilities;
+};
+
+struct LeaseRef {
+  std::string jobId;
+  uint32_t chain = 0;
+  uint64_t epoch = 0;
+};
+
+class Coordinator {
+ public:
+  explicit Coordinator(CoordinatorOptions options);
+  ~Coordinator();  // cancels what still runs and joins every thread
+  Coordinator(const Coordinator&) = delete;
+  Coordinator& operator=(const Coordinator&) = delete;
+
+  BlobStore& blobs() { return blobs_; }
+  double leaseSeconds() const { return options_.leaseSeconds; }
+  const std::string& dataDir() const { return options_.dataDir; }
+
+  // --- Client side
+  // Validates the settings and inputs and starts the job (loading and bootstrap run on a
+  // thread of the job's own).
+  Status submit(JobSpec spec, std::string* jobId);
+  Status progress(const std::string& jobId, uint32_t errorSeriesFrom, JobProgress* out) const;
+  Status cancel(const std::string& jobId, JobPhase* phase);
+  std::vector<JobProgress> list() const;  // in submission order, without error series
+  Status imageFile(const std::string& jobId, std::string* path) const;
+  Status finalImage(const std::string& jobId, Image* image, ImageMetadata* metadata) const;
+  Status waitForEnd(const std::string& jobId, SteadyClock::duration timeout, JobPhase* phase) const;
+  std::shared_ptr<const RenderJob> renderJob(const std::string& jobId) const;
+
+  // --- Worker side
+  Status registerWorker(const WorkerInfo& info, std::string* workerId);
+  // Chains from the oldest rendering job first, only of algorithms the worker runs.
+  Status leaseChains(const std::string& workerId, int max, std::vector<WorkerLease>* leases);
+  Status renewLeases(const std::string& workerId, const std::vector<LeaseRef>& leases,
+                     std::vector<LeaseRef>* lost);
+  Status acceptFlush(const std::string& workerId, const std::string& jobId, uint64_t epoch,
+                     ChainFlush&& flush, FlushAck* ack);
+
+  // Expires leases, enforces time budgets, finishes jobs; also runs on a timer. Tests pass a
+  // later `now` to make leases expire without waiting for them.
+  void tick(SteadyClock::time_point now = SteadyClock::now());
+
+ private:
+  std::shared_ptr<Job> findJob(const std::string& jobId) const;
+  Status findWorker(const std::string& workerId, WorkerInfo* info) const;
+  void housekeeping();
+
+  const CoordinatorOptions options_;
+  BlobStore blobs_;
+
+  mutable std::mutex mutex_;
+  std::vector<std::shared_ptr<Job>> jobs_;  // submission order
+  std::map<std::string, std::shared_ptr<Job>> jobsById_;
+  std::map<std::string, WorkerInfo> workers_;
+
+  std::mutex housekeepingMutex_;
+  std::condition_variable housekeepingWake_;
+  bool shuttingDown_ = false;
+  std::thread housekeeper_;
+};
+
+// Empty when the settings are acceptable for a job, else one line saying what is wrong: the
+// renderer's RenderSettings::validate() plus the checks a hostile request needs first.
+std::string checkJobSettings(const RenderSettings& settings);
+
+// A random identifier: prefix + 12 hex digits.
+std::string randomId(const std::string& prefix);
+
+}  // namespace farm

@@ -1,0 +1,619 @@
+#include "coordinator/grpc_service.h"
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+
+#include "coordinator/coordinator.h"
+#include "proto/convert.h"
+#include "proto/farm.grpc.pb.h"
+#include "proto/sha256.h"
+#include "proto/wire_limits.h"
+
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "splat buffers travel as little-endian floats; add byte swapping for this host"
+#endif
+
+namespace farm {
+namespace {
+
+grpc::Status toGrpc(const Status& s) {
+  using grpc::StatusCode;
+  switch (s.code()) {
+    case farm::StatusCode::kOk:
+      return grpc::Status::OK;
+    case farm::StatusCode::kInvalidArgument:
+      return {StatusCode::INVALID_ARGUMENT, s.message()};
+    case farm::StatusCode::kNotFound:
+      return {StatusCode::NOT_FOUND, s.message()};
+    case farm::StatusCode::kFailedPrecondition:
+      return {StatusCode::FAILED_PRECONDITION, s.message()};
+    case farm::StatusCode::kResourceExhausted:
+      return {StatusCode::RESOURCE_EXHAUSTED, s.message()};
+    case farm::StatusCode::kDataLoss:
+      return {StatusCode::DATA_LOSS, s.message()};
+    case farm::StatusCode::kUnavailable:
+      return {StatusCode::UNAVAILABLE, s.message()};
+    case farm::StatusCode::kDeadlineExceeded:
+      return {StatusCode::DEADLINE_EXCEEDED, s.message()};
+    case farm::StatusCode::kCancelled:
+      return {StatusCode::CANCELLED, s.message()};
+    case farm::StatusCode::kInternal:
+      return {StatusCode::INTERNAL, s.message()};
+  }
+  return {StatusCode::UNKNOWN, s.message()};
+}
+
+grpc::Status invalid(const std::string& message) {
+  return {grpc::StatusCode::INVALID_ARGUMENT, message};
+}
+
+v1::JobPhase toProto(JobPhase phase) {
+  switch (phase) {
+    case JobPhase::kSubmitted:
+      return v1::SUBMITTED;
+    case JobPhase::kLoadingScene:
+      return v1::LOADING_SCENE;
+    case JobPhase::kBootstrapping:
+      return v1::BOOTSTRAPPING;
+    case JobPhase::kRendering:
+      return v1::RENDERING;
+    case JobPhase::kFinishing:
+      return v1::FINISHING;
+    case JobPhase::kDone:
+      return v1::DONE;
+    case JobPhase::kFailed:
+      return v1::FAILED;
+    case JobPhase::kCancelled:
+      return v1::CANCELLED;
+  }
+  return v1::PHASE_UNSPECIFIED;
+}
+
+BundleManifest fromProto(const v1::BundleManifest& m) {
+  BundleManifest manifest;
+  for (const v1::BundleFile& f : m.files()) manifest.push_back({f.path(), f.size(), f.hash()});
+  return manifest;
+}
+
+void toProto(const JobProgress& p, v1::JobProgress* m) {
+  m->set_job_id(p.jobId);
+  m->set_phase(toProto(p.phase));
+  m->set_error(p.error);
+  m->set_fraction(p.fraction);
+  m->set_work_done(p.workDone);
+  m->set_planned_work(p.plannedWork);
+  m->set_samples_per_second(p.samplesPerSecond);
+  m->set_elapsed_seconds(p.elapsedSeconds);
+  m->set_eta_seconds(p.etaSeconds);
+  m->set_normalization(p.normalization);
+  m->set_normalization_std_error(p.normalizationStdError);
+  m->set_bootstrap_seconds(p.bootstrapSeconds);
+  m->set_chains_total(p.chainsTotal);
+  m->set_chains_finished(p.chainsFinished);
+  m->set_chains_leased(p.chainsLeased);
+  m->set_has_reference(p.hasReference);
+  for (const ErrorSample& e : p.errorSeries) {
+    v1::ErrorSample* s = m->add_error_series();
+    s->set_elapsed_seconds(e.elapsedSeconds);
+    s->set_samples(e.samples);
+    s->set_rmse(e.rmse);
+    s->set_relmse(e.relMse);
+  }
+  m->set_error_series_total(p.errorSeriesTotal);
+  m->set_rejected_splats(p.rejectedSplats);
+  m->set_width(p.width);
+  m->set_height(p.height);
+  *m->mutable_settings() = farm::toProto(p.settings);
+  m->set_name(p.name);
+  m->set_render_seconds(p.renderSeconds);
+  m->set_load_seconds(p.loadSeconds);
+  m->set_rays(p.rays);
+  m->set_rays_per_second(p.raysPerSecond);
+}
+
+// Ids are short; a request with a huge or empty one is malformed, not merely unknown.
+grpc::Status checkId(const std::string& id, const char* what) {
+  if (id.empty()) return invalid(std::string(what) + " is empty");
+  if (id.size() > 256) return invalid(std::string(what) + " is longer than 256 characters");
+  return grpc::Status::OK;
+}
+
+// Streams a file in chunks; `wrap` puts each chunk into the stream's message type.
+template <typename Message, typename Wrap>
+grpc::Status streamFile(const std::string& path, const std::string& label,
+                        grpc::ServerWriter<Message>* writer, const Wrap& wrap) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return {grpc::StatusCode::INTERNAL, "cannot read " + label + " on the coordinator"};
+  const uint64_t size = uint64_t(in.tellg());
+  in.seekg(0);
+  std::string buffer;
+  uint64_t offset = 0;
+  do {
+    buffer.resize(size_t(std::min<uint64_t>(kMaxChunkBytes, size - offset)));
+    in.read(buffer.data(), std::streamsize(buffer.size()));
+    if (!in) return {grpc::StatusCode::INTERNAL, "error reading " + label + " on the coordinator"};
+    Message message;
+    wrap(size, offset, buffer, &message);
+    if (!writer->Write(message)) return {grpc::StatusCode::CANCELLED, "the client went away"};
+    offset += buffer.size();
+  } while (offset < size);
+  return grpc::Status::OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class ClientService final : public v1::ClientApi::Service {
+ public:
+  explicit ClientService(Coordinator* coordinator) : coordinator_(coordinator) {}
+
+  grpc::Status MissingBlobs(grpc::ServerContext*, const v1::MissingBlobsRequest* request,
+                            v1::MissingBlobsResponse* response) override {
+    if (request->hashes_size() > 1000000) return invalid("more than 10^6 hashes in one request");
+    for (const std::string& hash : request->hashes()) {
+      if (!isSha256Hex(hash)) {
+        return invalid("'" + hash.substr(0, 80) + "' is not a SHA-256 hash (64 lowercase hex)");
+      }
+      if (!coordinator_->blobs().has(hash)) response->add_missing_hashes(hash);
+    }
+    return grpc::Status::OK;
+  }
+
+  grpc::Status SubmitJob(grpc::ServerContext*, grpc::ServerReader<v1::SubmitJobRequest>* reader,
+                         v1::SubmitJobResponse* response) override {
+    v1::SubmitJobRequest message;
+    if (!reader->Read(&message) || !message.has_header()) {
+      return invalid("SubmitJob: the first message must be the job header");
+    }
+    const v1::JobHeader header = message.header();
+
+    RenderSettings settings;
+    std::string problem;
+    if (!farm::fromProto(header.settings(), &settings, &problem)) {
+      return invalid("invalid render settings: " + problem);
+    }
+    problem = checkJobSettings(settings);
+    if (!problem.empty()) return invalid("invalid render settings: " + problem);
+
+    const BundleManifest manifest = fromProto(header.manifest());
+    if (manifest.empty()) return invalid("the scene bundle lists no files");
+    problem = checkManifest(manifest);
+    if (!problem.empty()) return invalid("invalid bundle manifest: " + problem);
+    bool hasScene = false;
+    for (const BundleEntry& e : manifest) hasScene |= e.path == header.scene_path();
+    if (!hasScene) {
+      return invalid("the scene file '" + header.scene_path().substr(0, 200) +
+                     "' is not in the bundle");
+    }
+    const bool hasReference = !header.reference().hash().empty();
+    if (hasReference) {
+      BundleManifest ref{{"reference.exr", header.reference().size(), header.reference().hash()}};
+      problem = checkManifest(ref);
+      if (!problem.empty()) return invalid("invalid reference image entry: " + problem);
+    }
+
+    // The blobs still to come: every listed file the store does not hold yet.
+    struct Expected {
+      uint64_t size;
+      std::string label;
+      std::unique_ptr<BlobStore::Writer> writer;
+    };
+    std::map<std::string, Expected> expected;
+    std::map<std::string, std::string> labels;  // every blob of the job, stored or not
+    auto expect = [&](const std::string& hash, uint64_t size, const std::string& label) {
+      labels.emplace(hash, label);
+      if (!coordinator_->blobs().has(hash)) expected.emplace(hash, Expected{size, label, nullptr});
+    };
+    for (const BundleEntry& e : manifest) expect(e.hash, e.size, e.path);
+    if (hasReference) {
+      expect(header.reference().hash(), header.reference().size(), "the reference image");
+    }
+    auto writerFor = [&](Expected& blob, const std::string& hash, grpc::Status* error) {
+      if (!blob.writer) {
+        Status s = coordinator_->blobs().beginWrite(hash, blob.size, blob.label, &blob.writer);
+        if (!s.isOk()) *error = toGrpc(s);
+      }
+      return blob.writer.get();
+    };
+    // Empty files carry no chunks.
+    for (auto& [hash, blob] : expected) {
+      if (blob.size != 0) continue;
+      grpc::Status error;
+      BlobStore::Writer* writer = writerFor(blob, hash, &error);
+      if (!writer) return error;
+      Status s = writer->commit();
+      if (!s.isOk()) return toGrpc(s);
+    }
+
+    while (reader->Read(&message)) {
+      if (!message.has_chunk()) return invalid("SubmitJob: only the first message may be a header");
+      const v1::BlobChunk& chunk = message.chunk();
+      if (chunk.data().size() > kMaxChunkBytes) {
+        return invalid("a chunk of " + std::to_string(chunk.data().size()) +
+                       " bytes exceeds the chunk limit of " + std::to_string(kMaxChunkBytes));
+      }
+      auto it = expected.find(chunk.hash());
+      if (it == expected.end()) {
+        if (labels.count(chunk.hash())) continue;  // already stored: harmless resend
+        return invalid("a chunk names blob '" + chunk.hash().substr(0, 80) +
+                       "', which the manifest does not list");
+      }
+      grpc::Status error;
+      BlobStore::Writer* writer = writerFor(it->second, it->first, &error);
+      if (!writer) return error;
+      if (writer->complete()) {
+        return invalid("chunks of '" + it->second.label + "' exceed its declared size");
+      }
+      Status s = writer->append(chunk.offset(), chunk.data());
+      if (!s.isOk()) return toGrpc(s);
+      if (writer->complete()) {
+        s = writer->commit();
+        if (!s.isOk()) return toGrpc(s);
+      }
+    }
+    for (const auto& [hash, label] : labels) {
+      if (coordinator_->blobs().has(hash)) continue;
+      auto it = expected.find(hash);
+      if (it != expected.end() && it->second.writer && it->second.writer->received() > 0) {
+        return invalid("upload of '" + label + "' ended after " +
+                       std::to_string(it->second.writer->received()) + " of " +
+                       std::to_string(it->second.size) + " bytes");
+      }
+      return invalid("the bundle is missing '" + label + "' (sha256 " + hash +
+                     "): it was neither uploaded nor already on the coordinator");
+    }
+
+    JobSpec spec;
+    spec.settings = settings;
+    spec.bundleHash = coordinator_->blobs().registerBundle(manifest);
+    Status s = coordinator_->blobs().materialize(spec.bundleHash, &spec.bundleRoot);
+    if (!s.isOk()) return toGrpc(s);
+    spec.bundleScenePath = header.scene_path();
+    spec.scenePath = spec.bundleRoot + "/" + header.scene_path();
+    if (hasReference) spec.referencePath = coordinator_->blobs().pathOf(header.reference().hash());
+    spec.name = header.name().empty() ? header.scene_path() : header.name().substr(0, 200);
+    const std::string bundleHash = spec.bundleHash;
+    std::string jobId;
+    s = coordinator_->submit(std::move(spec), &jobId);
+    if (!s.isOk()) return toGrpc(s);
+    response->set_job_id(jobId);
+    response->set_bundle_hash(bundleHash);
+    return grpc::Status::OK;
+  }
+
+  grpc::Status GetProgress(grpc::ServerContext*, const v1::GetProgressRequest* request,
+                           v1::JobProgress* response) override {
+    grpc::Status check = checkId(request->job_id(), "job id");
+    if (!check.ok()) return check;
+    JobProgress progress;
+    Status s = coordinator_->progress(request->job_id(), request->error_series_from(), &progress);
+    if (!s.isOk()) return toGrpc(s);
+    toProto(progress, response);
+    return grpc::Status::OK;
+  }
+
+  grpc::Status FetchImage(grpc::ServerContext* context, const v1::FetchImageRequest* request,
+                          grpc::ServerWriter<v1::ImageChunk>* writer) override {
+    grpc::Status check = checkId(request->job_id(), "job id");
+    if (!check.ok()) return check;
+    if (request->wait()) {
+      // Wait in short steps so a client that gives up (or a deadline) frees this thread.
+      for (;;) {
+        JobPhase phase;
+        Status s =
+            coordinator_->waitForEnd(request->job_id(), std::chrono::milliseconds(250), &phase);
+        if (!s.isOk()) return toGrpc(s);
+        if (isTerminal(phase)) break;
+        if (context->IsCancelled()) {
+          return {grpc::StatusCode::CANCELLED, "the client stopped waiting"};
+        }
+      }
+    }
+    std::string path;
+    Status s = coordinator_->imageFile(request->job_id(), &path);
+    if (!s.isOk()) return toGrpc(s);
+    return streamFile<v1::ImageChunk>(
+        path, "the image", writer,
+        [](uint64_t total, uint64_t offset, const std::string& bytes, v1::ImageChunk* m) {
+          m->set_total_size(total);
+          m->set_offset(offset);
+          m->set_data(bytes);
+        });
+  }
+
+  grpc::Status CancelJob(grpc::ServerContext*, const v1::CancelJobRequest* request,
+                         v1::CancelJobResponse* response) override {
+    grpc::Status check = checkId(request->job_id(), "job id");
+    if (!check.ok()) return check;
+    JobPhase phase;
+    Status s = coordinator_->cancel(request->job_id(), &phase);
+    if (!s.isOk()) return toGrpc(s);
+    response->set_phase(toProto(phase));
+    return grpc::Status::OK;
+  }
+
+  grpc::Status ListJobs(grpc::ServerContext*, const v1::ListJobsRequest*,
+                        v1::ListJobsResponse* response) override {
+    for (const JobProgress& p : coordinator_->list()) {
+      v1::JobSummary* job = response->add_jobs();
+      job->set_job_id(p.jobId);
+      job->set_phase(toProto(p.phase));
+      job->set_fraction(p.fraction);
+      job->set_name(p.name);
+      job->set_algorithm(farm::toProto(p.settings.algorithm));
+      job->set_elapsed_seconds(p.elapsedSeconds);
+      job->set_error(p.error);
+    }
+    return grpc::Status::OK;
+  }
+
+ private:
+  Coordinator* coordinator_;
+};
+
+// ---------------------------------------------------------------------------------------------
+
+class WorkerService final : public v1::WorkerApi::Service {
+ public:
+  explicit WorkerService(Coordinator* coordinator) : coordinator_(coordinator) {}
+
+  grpc::Status RegisterWorker(grpc::ServerContext*, const v1::RegisterWorkerRequest* request,
+                              v1::RegisterWorkerResponse* response) override {
+    if (request->protocol_version() != kProtocolVersion) {
+      return {grpc::StatusCode::FAILED_PRECONDITION,
+              "worker speaks farm protocol " + std::to_string(request->protocol_version()) +
+                  ", this coordinator speaks " + std::to_string(kProtocolVersion) +
+                  ": run matching versions of farm-worker and farm-coordinator"};
+    }
+    WorkerInfo info;
+    info.version = request->worker_version().substr(0, 100);
+    info.host = request->host().substr(0, 256);
+    info.threads = request->threads();
+    for (const std::string& name : request->capabilities()) {
+      Algorithm algorithm;
+      if (parseAlgorithm(name, &algorithm)) info.capabilities.insert(algorithm);
+    }
+    std::string id;
+    Status s = coordinator_->registerWorker(info, &id);
+    if (!s.isOk()) return toGrpc(s);
+    response->set_worker_id(id);
+    response->set_protocol_version(kProtocolVersion);
+    response->set_lease_seconds(coordinator_->leaseSeconds());
+    return grpc::Status::OK;
+  }
+
+  grpc::Status LeaseChains(grpc::ServerContext*, const v1::LeaseChainsRequest* request,
+                           v1::LeaseChainsResponse* response) override {
+    grpc::Status check = checkId(request->worker_id(), "worker id");
+    if (!check.ok()) return check;
+    std::vector<WorkerLease> leases;
+    Status s = coordinator_->leaseChains(request->worker_id(), request->max_chains(), &leases);
+    if (!s.isOk()) return toGrpc(s);
+    const auto steadyNow = SteadyClock::now();
+    const auto systemNow = std::chrono::system_clock::now();
+    for (const WorkerLease& w : leases) {
+      v1::ChainLease* lease = response->add_leases();
+      *lease->mutable_spec() = farm::toProto(w.lease.spec);
+      lease->set_epoch(w.lease.epoch);
+      const auto deadline =
+          systemNow + std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                          w.lease.deadline - steadyNow);
+      lease->set_deadline_unix_ms(
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline.time_since_epoch())
+              .count());
+      lease->set_bundle_hash(w.bundleHash);
+      lease->set_scene_path(w.bundleScenePath);
+      *lease->mutable_settings() = farm::toProto(w.settings);
+    }
+    if (leases.empty()) response->set_retry_after_ms(500);
+    return grpc::Status::OK;
+  }
+
+  grpc::Status RenewLeases(grpc::ServerContext*, const v1::RenewLeasesRequest* request,
+                           v1::RenewLeasesResponse* response) override {
+    grpc::Status check = checkId(request->worker_id(), "worker id");
+    if (!check.ok()) return check;
+    if (request->leases_size() > 4096) return invalid("more than 4096 leases in one renewal");
+    std::vector<LeaseRef> refs, lost;
+    for (const v1::LeaseRef& r : request->leases()) {
+      refs.push_back({r.job_id(), r.chain_index(), r.epoch()});
+    }
+    Status s = coordinator_->renewLeases(request->worker_id(), refs, &lost);
+    if (!s.isOk()) return toGrpc(s);
+    for (const LeaseRef& r : lost) {
+      v1::LeaseRef* m = response->add_lost();
+      m->set_job_id(r.jobId);
+      m->set_chain_index(r.chain);
+      m->set_epoch(r.epoch);
+    }
+    return grpc::Status::OK;
+  }
+
+  grpc::Status FetchSceneBundle(grpc::ServerContext*, const v1::FetchSceneBundleRequest* request,
+                                grpc::ServerWriter<v1::SceneBundleChunk>* writer) override {
+    if (!isSha256Hex(request->bundle_hash())) {
+      return invalid("bundle hash '" + request->bundle_hash().substr(0, 80) +
+                     "' is not a SHA-256 hash");
+    }
+    BundleManifest manifest;
+    if (!coordinator_->blobs().findBundle(request->bundle_hash(), &manifest)) {
+      return {grpc::StatusCode::NOT_FOUND, "unknown scene bundle " + request->bundle_hash()};
+    }
+    v1::SceneBundleChunk first;
+    for (const BundleEntry& e : manifest) {
+      v1::BundleFile* f = first.mutable_manifest()->add_files();
+      f->set_path(e.path);
+      f->set_size(e.size);
+      f->set_hash(e.hash);
+    }
+    if (!writer->Write(first)) return {grpc::StatusCode::CANCELLED, "the worker went away"};
+    for (const BundleEntry& e : manifest) {
+      if (e.size == 0) continue;
+      grpc::Status s = streamFile<v1::SceneBundleChunk>(
+          coordinator_->blobs().pathOf(e.hash), "'" + e.path + "'", writer,
+          [&](uint64_t, uint64_t offset, const std::string& bytes, v1::SceneBundleChunk* m) {
+            m->mutable_chunk()->set_hash(e.hash);
+            m->mutable_chunk()->set_offset(offset);
+            m->mutable_chunk()->set_data(bytes);
+          });
+      if (!s.ok()) return s;
+    }
+    return grpc::Status::OK;
+  }
+
+  grpc::Status UploadFlush(grpc::ServerContext*, grpc::ServerReader<v1::UploadFlushRequest>* reader,
+                           v1::UploadFlushResponse* response) override {
+    v1::UploadFlushRequest message;
+    if (!reader->Read(&message) || !message.has_header()) {
+      return invalid("UploadFlush: the first message must be the flush header");
+    }
+    const v1::FlushHeader header = message.header();
+    grpc::Status check = checkId(header.worker_id(), "worker id");
+    if (!check.ok()) return check;
+    check = checkId(header.job_id(), "job id");
+    if (!check.ok()) return check;
+    if (!isSha256Hex(header.checksum())) {
+      return invalid("flush checksum is not a SHA-256 hash (64 lowercase hex)");
+    }
+    // Check the size against the job's film before receiving anything: the header alone must
+    // not make the coordinator allocate what it likes.
+    JobProgress job;
+    Status s = coordinator_->progress(header.job_id(), UINT32_MAX, &job);
+    if (!s.isOk()) return toGrpc(s);
+    if (job.width <= 0 || header.width() != job.width || header.height() != job.height) {
+      return invalid("flush is " + std::to_string(header.width()) + "x" +
+                     std::to_string(header.height()) + " but job " + header.job_id() + " renders " +
+                     std::to_string(job.width) + "x" + std::to_string(job.height));
+    }
+    const uint64_t expectedBytes = uint64_t(job.width) * uint64_t(job.height) * 3 * sizeof(float);
+    if (header.splat_bytes() != expectedBytes) {
+      return invalid("flush announces " + std::to_string(header.splat_bytes()) +
+                     " splat bytes; a " + std::to_string(job.width) + "x" +
+                     std::to_string(job.height) + " film takes " + std::to_string(expectedBytes));
+    }
+    std::string bytes;
+    bytes.reserve(size_t(expectedBytes));
+    while (reader->Read(&message)) {
+      if (!message.has_splats())
+        return invalid("UploadFlush: only the first message may be a header");
+      const std::string& chunk = message.splats();
+      if (chunk.size() > kMaxChunkBytes) {
+        return invalid("a splat chunk of " + std::to_string(chunk.size()) +
+                       " bytes exceeds the chunk limit of " + std::to_string(kMaxChunkBytes));
+      }
+      if (chunk.size() > expectedBytes - bytes.size()) {
+        return invalid("splat chunks exceed the announced " + std::to_string(expectedBytes) +
+                       " bytes");
+      }
+      bytes += chunk;
+    }
+    if (bytes.size() != expectedBytes) {
+      return invalid("flush ended after " + std::to_string(bytes.size()) + " of " +
+                     std::to_string(expectedBytes) + " splat bytes");
+    }
+    Sha256 digest;
+    digest.update(bytes);
+    digest.update(header.state());
+    const std::string actual = digest.hexDigest();
+    if (actual != header.checksum()) {
+      return {grpc::StatusCode::DATA_LOSS,
+              "checksum mismatch: the header says " + header.checksum() +
+                  ", the received splats and state hash to " + actual + " (resend the flush)"};
+    }
+    ChainFlush flush;
+    flush.chainIndex = header.chain_index();
+    flush.flushIndex = header.flush_index();
+    flush.mutations = header.mutations();
+    flush.width = header.width();
+    flush.height = header.height();
+    flush.rejectedSplats = header.rejected_splats();
+    flush.rays = header.rays();
+    flush.state = header.state();
+    flush.finished = header.finished();
+    flush.splats.resize(bytes.size() / sizeof(float));
+    std::memcpy(flush.splats.data(), bytes.data(), bytes.size());
+    bytes.clear();
+
+    FlushAck ack;
+    s = coordinator_->acceptFlush(header.worker_id(), header.job_id(), header.epoch(),
+                                  std::move(flush), &ack);
+    if (!s.isOk()) return toGrpc(s);
+    switch (ack.result) {
+      case FlushAck::Result::kAccepted:
+        response->set_result(v1::UploadFlushResponse::ACCEPTED);
+        break;
+      case FlushAck::Result::kDuplicate:
+        response->set_result(v1::UploadFlushResponse::DUPLICATE);
+        break;
+      case FlushAck::Result::kDiscarded:
+        response->set_result(v1::UploadFlushResponse::DISCARDED);
+        break;
+    }
+    response->set_stop(ack.stop);
+    response->set_reason(ack.reason);
+    return grpc::Status::OK;
+  }
+
+ private:
+  Coordinator* coordinator_;
+};
+
+class GrpcCoordinatorServer final : public CoordinatorServer {
+ public:
+  explicit GrpcCoordinatorServer(Coordinator* coordinator)
+      : clientService_(coordinator), workerService_(coordinator) {}
+
+  bool start(const std::string& address, std::string* error) {
+    grpc::EnableDefaultHealthCheckService(true);
+    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+    grpc::ServerBuilder builder;
+    builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &port_);
+    builder.SetMaxReceiveMessageSize(kMaxMessageBytes);
+    builder.SetMaxSendMessageSize(kMaxMessageBytes);
+    builder.RegisterService(&clientService_);
+    builder.RegisterService(&workerService_);
+    server_ = builder.BuildAndStart();
+    if (!server_ || port_ == 0) {
+      *error = "cannot listen on '" + address +
+               "' (in use, not an address of this host, or not HOST:PORT)";
+      server_.reset();
+      return false;
+    }
+    return true;
+  }
+
+  int port() const override { return port_; }
+
+  void shutdown() override {
+    if (!server_) return;
+    server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    server_->Wait();
+    server_.reset();
+  }
+
+  ~GrpcCoordinatorServer() override { shutdown(); }
+
+ private:
+  ClientService clientService_;
+  WorkerService workerService_;
+  std::unique_ptr<grpc::Server> server_;
+  int port_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<CoordinatorServer> CoordinatorServer::start(const std::string& address,
+                                                            Coordinator* coordinator,
+                                                            std::string* error) {
+  auto server = std::make_unique<GrpcCoordinatorServer>(coordinator);
+  if (!server->start(address, error)) return nullptr;
+  return server;
+}
+
+}  // namespace farm

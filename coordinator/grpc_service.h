@@ -1,0 +1,23 @@
+#pragma once
+// The coordinator on the network: farm.v1.ClientApi and farm.v1.WorkerApi over gRPC, plus the
+// standard health and reflection services. Every RPC checks its input and answers a status
+// whose message says what was wrong. gRPC stays inside grpc_service.cpp.
+#include <memory>
+#include <string>
+
+namespace farm {
+
+class Coordinator;
+
+class CoordinatorServer {
+ public:
+  // Listens on `address` (HOST:PORT; port 0 picks a free one). Null with *error on failure.
+  static std::unique_ptr<CoordinatorServer> start(const std::string& address,
+                                                  Coordinator* coordinator, std::string* error);
+  virtual ~CoordinatorServer() = default;
+  virtual int port() const = 0;
+  // Stops accepting calls and ends those in flight (after a short grace period).
+  virtual void shutdown() = 0;
+};
+
+}  // namespace farm

@@ -1,0 +1,428 @@
+#include "coordinator/job.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include "common/film/error_metrics.h"
+#include "coordinator/progress_math.h"
+
+namespace farm {
+namespace fs = std::filesystem;
+
+const char* jobPhaseName(JobPhase phase) {
+  switch (phase) {
+    case JobPhase::kSubmitted:
+      return "submitted";
+    case JobPhase::kLoadingScene:
+      return "loading-scene";
+    case JobPhase::kBootstrapping:
+      return "bootstrapping";
+    case JobPhase::kRendering:
+      return "rendering";
+    case JobPhase::kFinishing:
+      return "finishing";
+    case JobPhase::kDone:
+      return "done";
+    case JobPhase::kFailed:
+      return "failed";
+    case JobPhase::kCancelled:
+      return "cancelled";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// Loader messages name the file they read; for an uploaded bundle that is a path inside the
+// coordinator's data directory, which means nothing to the person who submitted the scene.
+std::string withoutPrefix(std::string message, const std::string& root) {
+  if (root.empty()) return message;
+  const std::string prefix = root + "/";
+  for (size_t at = message.find(prefix); at != std::string::npos; at = message.find(prefix, at)) {
+    message.erase(at, prefix.size());
+  }
+  return message;
+}
+
+}  // namespace
+
+Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
+         Log log)
+    : id_(std::move(id)),
+      spec_(std::move(spec)),
+      leaseDuration_(leaseDuration),
+      outputDir_(std::move(outputDir)),
+      submitted_(SteadyClock::now()),
+      log_(std::move(log)) {}
+
+Job::~Job() {
+  cancelRequested_ = true;
+  if (preparer_.joinable()) preparer_.join();
+}
+
+void Job::start() {
+  preparer_ = std::thread([this] { prepare(); });
+}
+
+JobPhase Job::phase() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return phase_;
+}
+
+double Job::secondsSince(SteadyClock::time_point t, SteadyClock::time_point now) const {
+  return std::chrono::duration<double>(now - t).count();
+}
+
+void Job::prepare() {
+  auto setPhase = [this](JobPhase phase) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (isTerminal(phase_)) return false;
+    phase_ = phase;
+    return true;
+  };
+  try {
+    if (!setPhase(JobPhase::kLoadingScene)) return;
+    const auto loadStart = SteadyClock::now();
+    std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, spec_.settings);
+    auto renderJob = std::make_shared<RenderJob>(scene, spec_.settings, id_);
+    std::optional<Image> reference;
+    if (!spec_.referencePath.empty()) {
+      Image image;
+      std::string error;
+      if (!readExr(spec_.referencePath, &image, &error)) {
+        throw std::runtime_error("cannot read the reference image: " + error);
+      }
+      if (image.width != renderJob->width() || image.height != renderJob->height()) {
+        throw std::runtime_error("the reference image is " + std::to_string(image.width) + "x" +
+                                 std::to_string(image.height) + " but the render is " +
+                                 std::to_string(renderJob->width()) + "x" +
+                                 std::to_string(renderJob->height()) +
+                                 " (set --width/--height to the reference's size)");
+      }
+      reference = std::move(image);
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (isTerminal(phase_)) return;
+      loadSeconds_ = secondsSince(loadStart, SteadyClock::now());
+      renderJob_ = renderJob;
+      width_ = renderJob->width();
+      height_ = renderJob->height();
+      reference_ = std::move(reference);
+      phase_ = JobPhase::kBootstrapping;
+    }
+
+    // The bootstrap runs without the lock: progress polls and cancellation must get through.
+    BootstrapResult bootstrap =
+        renderJob->bootstrap([this](const Progress&) { return !cancelRequested_.load(); });
+    std::vector<ChainSpec> chains = renderJob->planChains(bootstrap);
+    if (chains.empty()) throw std::runtime_error("the render plan has no chains");
+    for (size_t i = 0; i < chains.size(); ++i) {
+      if (chains[i].chainIndex != i) {
+        throw std::runtime_error("internal error: chain " + std::to_string(i) +
+                                 " of the plan carries index " +
+                                 std::to_string(chains[i].chainIndex));
+      }
+    }
+
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (isTerminal(phase_)) return;
+    const uint32_t count = uint32_t(chains.size());
+    bootstrap_ = std::move(bootstrap);
+    plannedWork_ = renderJob->plannedWork();
+    scheduler_ = std::make_unique<ChainScheduler>(std::move(chains), leaseDuration_);
+    aggregator_ = std::make_unique<SplatAggregator>(renderJob->width(), renderJob->height(), count);
+    renderStarted_ = SteadyClock::now();
+    phase_ = JobPhase::kRendering;
+    std::string z;
+    if (isMarkovChain(spec_.settings.algorithm)) {
+      z = ", Z = " + std::to_string(bootstrap_.normalization) + " +- " +
+          std::to_string(bootstrap_.normalizationStdError) + " after " +
+          std::to_string(bootstrap_.seconds) + " s of bootstrap";
+    }
+    log("rendering " + std::to_string(count) + " chains (" + std::to_string(width_) + "x" +
+        std::to_string(height_) + ", " + algorithmName(spec_.settings.algorithm) + z + ")");
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (isTerminal(phase_)) return;  // a cancelled bootstrap throws too
+    failLocked(withoutPrefix(e.what(), spec_.bundleRoot));
+  }
+}
+
+void Job::failLocked(const std::string& message) {
+  phase_ = JobPhase::kFailed;
+  error_ = message.empty() ? "unknown error" : message;
+  log("failed: " + error_);
+  endedAt_ = SteadyClock::now();
+  if (scheduler_) scheduler_->stop();
+  endedSignal_.notify_all();
+}
+
+std::vector<WorkerLease> Job::lease(const std::string& worker, int max,
+                                    SteadyClock::time_point now) {
+  std::vector<WorkerLease> out;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (phase_ != JobPhase::kRendering) return out;
+  enforceBudgetLocked(now);
+  for (ChainLease& lease : scheduler_->lease(worker, max, now)) {
+    WorkerLease w;
+    w.jobId = id_;
+    w.lease = std::move(lease);
+    w.bundleHash = spec_.bundleHash;
+    w.bundleScenePath = spec_.bundleScenePath;
+    w.settings = spec_.settings;
+    out.push_back(std::move(w));
+  }
+  return out;
+}
+
+bool Job::renew(const std::string& worker, uint32_t chain, uint64_t epoch,
+                SteadyClock::time_point now) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (phase_ != JobPhase::kRendering) return false;
+  return scheduler_->renew(worker, chain, epoch, now);
+}
+
+Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& flush,
+                        SteadyClock::time_point now, FlushAck* ack) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  *ack = FlushAck();
+  if (isTerminal(phase_) || phase_ == JobPhase::kFinishing) {
+    ack->result = FlushAck::Result::kDiscarded;
+    ack->stop = true;
+    ack->reason = std::string("job ") + id_ + " is " + jobPhaseName(phase_);
+    return Status::ok();
+  }
+  if (phase_ != JobPhase::kRendering) {
+    return Status::failedPrecondition("job " + id_ + " is " + jobPhaseName(phase_) +
+                                      "; it has no chains yet");
+  }
+  const uint32_t chain = flush.chainIndex;
+  if (!scheduler_->hasChain(chain)) {
+    return Status::notFound("job " + id_ + " has no chain " + std::to_string(chain) + " (it has " +
+                            std::to_string(scheduler_->chainCount()) + ")");
+  }
+  enforceBudgetLocked(now);
+
+  std::string problem;
+  const FlushOutcome outcome = aggregator_->add(flush, &problem);
+  switch (outcome) {
+    case FlushOutcome::kAccepted:
+      scheduler_->recordFlush(chain, flush.flushIndex, flush.mutations, std::move(flush.state),
+                              flush.finished, worker, epoch, now);
+      ack->result = FlushAck::Result::kAccepted;
+      break;
+    case FlushOutcome::kDuplicate:
+      ack->result = FlushAck::Result::kDuplicate;
+      break;
+    case FlushOutcome::kOutOfOrder:
+      return Status::failedPrecondition("job " + id_ + ": " + problem);
+    case FlushOutcome::kUnknownChain:
+      return Status::notFound("job " + id_ + ": " + problem);
+    case FlushOutcome::kWrongSize:
+    case FlushOutcome::kBadValues:
+      return Status::invalidArgument("job " + id_ + ": " + problem);
+  }
+
+  const bool holder = scheduler_->holds(worker, chain, epoch);
+  const bool chainEnds = flush.finished && outcome == FlushOutcome::kAccepted;
+  if (!chainEnds) {
+    if (scheduler_->stopping()) {
+      ack->stop = true;
+      ack->reason = "the job's time budget is spent";
+      if (holder) scheduler_->finishChain(chain);
+    } else if (!holder) {
+      ack->stop = true;
+      ack->reason = "this worker no longer holds the lease of chain " + std::to_string(chain) +
+                    " (it expired, moved to another worker, or the chain finished)";
+    }
+  }
+  if (outcome == FlushOutcome::kAccepted) recordErrorLocked(now, false);
+  finishIfCompleteLocked(now);
+  return Status::ok();
+}
+
+void Job::tick(SteadyClock::time_point now) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (phase_ != JobPhase::kRendering) return;
+  if (int expired = scheduler_->expireLeases(now)) {
+    log(std::to_string(expired) + " lease(s) expired; " +
+        (scheduler_->stopping() ? "those chains end there"
+                                : "those chains resume from their last accepted flush"));
+  }
+  enforceBudgetLocked(now);
+  finishIfCompleteLocked(now);
+}
+
+void Job::enforceBudgetLocked(SteadyClock::time_point now) {
+  const double budget = spec_.settings.timeBudgetSeconds;
+  if (budget > 0 && !scheduler_->stopping() && secondsSince(submitted_, now) >= budget) {
+    scheduler_->stop();
+  }
+}
+
+void Job::recordErrorLocked(SteadyClock::time_point now, bool force) {
+  if (!reference_ || !aggregator_ || !renderJob_) return;
+  const int64_t work = aggregator_->workDone();
+  if (work <= 0) return;
+  if (!errorSeries_.empty() && errorSeries_.back().samples == work) return;
+  // Each measurement resolves and compares the whole film (W*H work): skip flushes while the
+  // measurements have cost more than a tenth of the job's time so far.
+  if (!force && metricsSeconds_ > 0.1 * secondsSince(submitted_, now)) return;
+  const auto start = SteadyClock::now();
+  Image image = renderJob_->resolve(aggregator_->sums(), renderJob_->imageScale(bootstrap_, work));
+  ErrorMetrics metrics;
+  std::string error;
+  if (compareImages(image, *reference_, &metrics, &error)) {
+    errorSeries_.push_back({secondsSince(submitted_, now), work, metrics.rmse, metrics.relMse});
+  }
+  metricsSeconds_ += secondsSince(start, SteadyClock::now());
+}
+
+void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
+  if (phase_ != JobPhase::kRendering || !scheduler_->allFinished()) return;
+  phase_ = JobPhase::kFinishing;
+  try {
+    const int64_t work = aggregator_->workDone();
+    if (work <= 0) {
+      failLocked("no chain reported any work before the job ended (time budget too short?)");
+      return;
+    }
+    recordErrorLocked(now, true);
+    const double seconds = secondsSince(submitted_, now);
+    Image image =
+        renderJob_->resolve(aggregator_->sums(), renderJob_->imageScale(bootstrap_, work));
+    ImageMetadata metadata = renderJob_->metadata(bootstrap_, work, seconds);
+    metadata["farm:jobId"] = id_;
+    std::error_code ec;
+    fs::create_directories(outputDir_, ec);
+    const std::string path = (fs::path(outputDir_) / "image.exr").string();
+    std::string error;
+    if (!writeExr(path, image, metadata, &error)) {
+      failLocked("cannot write the final image: " + error);
+      return;
+    }
+    writePreview((fs::path(outputDir_) / "image.png").string(), image, &error);
+    imagePath_ = path;
+    finalImage_ = std::move(image);
+    finalMetadata_ = std::move(metadata);
+    phase_ = JobPhase::kDone;
+    endedAt_ = now;
+    renderJob_.reset();  // the scene is no longer needed here (workers may still hold theirs)
+    log("done in " + std::to_string(seconds) + " s, " + std::to_string(work) + " " +
+        (isMarkovChain(spec_.settings.algorithm) ? "mutations" : "samples"));
+    endedSignal_.notify_all();
+  } catch (const std::exception& e) {
+    failLocked(std::string("cannot resolve the final image: ") + e.what());
+  }
+}
+
+JobPhase Job::cancel() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (isTerminal(phase_)) return phase_;
+  cancelRequested_ = true;
+  phase_ = JobPhase::kCancelled;
+  log("cancelled");
+  endedAt_ = SteadyClock::now();
+  if (scheduler_) scheduler_->stop();
+  endedSignal_.notify_all();
+  return phase_;
+}
+
+JobProgress Job::progress(uint32_t errorSeriesFrom) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  JobProgress p;
+  p.jobId = id_;
+  p.name = spec_.name;
+  p.phase = phase_;
+  p.error = error_;
+  p.settings = spec_.settings;
+  const SteadyClock::time_point now = endedAt_ ? *endedAt_ : SteadyClock::now();
+  p.elapsedSeconds = secondsSince(submitted_, now);
+  p.loadSeconds = loadSeconds_;
+  p.bootstrapSeconds = bootstrap_.seconds;
+  p.normalization = bootstrap_.normalization;
+  p.normalizationStdError = bootstrap_.normalizationStdError;
+  p.plannedWork = plannedWork_;
+  p.width = width_;
+  p.height = height_;
+  if (renderStarted_) p.renderSeconds = secondsSince(*renderStarted_, now);
+  if (aggregator_) {
+    p.workDone = aggregator_->workDone();
+    p.rejectedSplats = aggregator_->rejectedSplats();
+    p.rays = aggregator_->rays();
+    if (p.renderSeconds > 0) p.raysPerSecond = double(p.rays) / p.renderSeconds;
+  }
+  if (scheduler_) {
+    p.chainsTotal = scheduler_->chainCount();
+    p.chainsFinished = scheduler_->finishedCount();
+    p.chainsLeased = scheduler_->leasedCount();
+  }
+  const ProgressEstimate estimate =
+      estimateProgress(p.workDone, p.plannedWork, spec_.settings.timeBudgetSeconds,
+                       p.elapsedSeconds, p.renderSeconds);
+  p.fraction = estimate.fraction;
+  p.samplesPerSecond = estimate.samplesPerSecond;
+  p.etaSeconds = estimate.etaSeconds;
+  if (phase_ == JobPhase::kDone) {
+    p.fraction = 1;
+    p.etaSeconds = 0;
+  } else if (phase_ != JobPhase::kRendering) {
+    p.etaSeconds = -1;
+    if (phase_ != JobPhase::kFinishing && isTerminal(phase_)) p.etaSeconds = 0;
+  }
+  p.hasReference = reference_.has_value() || !spec_.referencePath.empty();
+  p.errorSeriesTotal = uint32_t(errorSeries_.size());
+  for (size_t i = errorSeriesFrom; i < errorSeries_.size(); ++i) {
+    p.errorSeries.push_back(errorSeries_[i]);
+  }
+  return p;
+}
+
+Status Job::notDoneStatusLocked() const {
+  switch (phase_) {
+    case JobPhase::kDone:
+      return Status::ok();
+    case JobPhase::kFailed:
+      return Status::failedPrecondition("job " + id_ + " failed: " + error_);
+    case JobPhase::kCancelled:
+      return Status::failedPrecondition("job " + id_ + " was cancelled");
+    default: {
+      std::string done;
+      if (aggregator_ && plannedWork_ > 0) {
+        done = " (" + std::to_string(int(100.0 * double(aggregator_->workDone()) / plannedWork_)) +
+               "% done)";
+      }
+      return Status::failedPrecondition("job " + id_ + " is still " + jobPhaseName(phase_) + done);
+    }
+  }
+}
+
+Status Job::imageFile(std::string* path) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Status status = notDoneStatusLocked();
+  if (status.isOk()) *path = imagePath_;
+  return status;
+}
+
+Status Job::finalImage(Image* image, ImageMetadata* metadata) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Status status = notDoneStatusLocked();
+  if (!status.isOk()) return status;
+  if (image) *image = *finalImage_;
+  if (metadata) *metadata = finalMetadata_;
+  return status;
+}
+
+JobPhase Job::waitForEnd(SteadyClock::duration timeout) const {
+  std::unique_lock<std::mutex> lock(mutex_);
+  endedSignal_.wait_for(lock, timeout, [this] { return isTerminal(phase_); });
+  return phase_;
+}
+
+std::shared_ptr<const RenderJob> Job::renderJob() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return renderJob_;
+}
+
+}  // namespace farm

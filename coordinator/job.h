@@ -1,0 +1,169 @@
+#pragma once
+// One render job on the coordinator, through its lifecycle: submitted -> loading the scene ->
+// bootstrapping (on a thread of its own) -> rendering (chains leased to workers, flushes summed)
+// -> done; or failed (with the reason kept for status and fetch) or cancelled.
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/film/image.h"
+#include "common/render/render_job.h"
+#include "coordinator/chain_scheduler.h"
+#include "coordinator/splat_aggregator.h"
+#include "coordinator/status.h"
+
+namespace farm {
+
+enum class JobPhase {
+  kSubmitted,
+  kLoadingScene,
+  kBootstrapping,
+  kRendering,
+  kFinishing,
+  kDone,
+  kFailed,
+  kCancelled,
+};
+const char* jobPhaseName(JobPhase phase);
+inline bool isTerminal(JobPhase p) {
+  return p == JobPhase::kDone || p == JobPhase::kFailed || p == JobPhase::kCancelled;
+}
+
+// What a job renders and where its inputs are on the coordinator's disk.
+struct JobSpec {
+  RenderSettings settings;
+  std::string scenePath;        // the file to load
+  std::string referencePath;    // an EXR to measure the error against, or empty
+  std::string name;             // for listings
+  std::string bundleHash;       // what workers fetch; empty for embedded jobs (same process)
+  std::string bundleScenePath;  // the scene inside the bundle
+  std::string bundleRoot;       // stripped from loader messages so they name bundle paths
+};
+
+struct ErrorSample {
+  double elapsedSeconds = 0;
+  int64_t samples = 0;
+  double rmse = 0, relMse = 0;
+};
+
+struct JobProgress {
+  std::string jobId, name, error;
+  JobPhase phase = JobPhase::kSubmitted;
+  double fraction = 0, samplesPerSecond = 0, elapsedSeconds = 0, etaSeconds = -1;
+  int64_t workDone = 0, plannedWork = 0, rejectedSplats = 0;
+  int64_t rays = 0;  // traced for the accepted work
+  double raysPerSecond = 0;
+  double normalization = 0, normalizationStdError = 0;
+  double loadSeconds = 0, bootstrapSeconds = 0, renderSeconds = 0;
+  uint32_t chainsTotal = 0, chainsFinished = 0, chainsLeased = 0;
+  bool hasReference = false;
+  std::vector<ErrorSample> errorSeries;  // from the index asked for
+  uint32_t errorSeriesTotal = 0;
+  int width = 0, height = 0;
+  RenderSettings settings;
+};
+
+// A chain leased to a worker, with what the worker needs to load the scene.
+struct WorkerLease {
+  std::string jobId;
+  ChainLease lease;
+  std::string bundleHash, bundleScenePath;
+  RenderSettings settings;
+};
+
+struct FlushAck {
+  enum class Result { kAccepted, kDuplicate, kDiscarded };
+  Result result = Result::kAccepted;
+  bool stop = false;   // the chain should stop
+  std::string reason;  // why it should stop
+};
+
+class Job {
+ public:
+  using Log = std::function<void(const std::string&)>;
+  Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
+      Log log = {});
+  ~Job();  // cancels and joins the preparation thread
+  Job(const Job&) = delete;
+  Job& operator=(const Job&) = delete;
+
+  // Starts loading and bootstrapping on a thread of the job's own.
+  void start();
+
+  const std::string& id() const { return id_; }
+  const JobSpec& spec() const { return spec_; }
+  JobPhase phase() const;
+
+  // Up to `max` chains for `worker`, if the job is rendering.
+  std::vector<WorkerLease> lease(const std::string& worker, int max, SteadyClock::time_point now);
+  bool renew(const std::string& worker, uint32_t chain, uint64_t epoch,
+             SteadyClock::time_point now);
+  // Validates and adds a flush. Not-OK statuses are the request's fault (unknown chain, wrong
+  // size, out of order, bad values); a duplicate or a flush for a finished job is OK with the ack
+  // saying so.
+  Status acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& flush,
+                     SteadyClock::time_point now, FlushAck* ack);
+  // Expires leases, enforces the time budget, finishes the job when every chain has ended.
+  void tick(SteadyClock::time_point now);
+  // Returns the phase after the cancellation (a job already over keeps its phase).
+  JobPhase cancel();
+
+  JobProgress progress(uint32_t errorSeriesFrom = 0) const;
+  // The final EXR on disk; FailedPrecondition (saying why) unless the job is done.
+  Status imageFile(std::string* path) const;
+  Status finalImage(Image* image, ImageMetadata* metadata) const;
+  // Blocks until the job is over or `timeout` passes; returns the phase.
+  JobPhase waitForEnd(SteadyClock::duration timeout) const;
+  // The renderer's job once loaded (null before): embedded workers run chains on it directly.
+  std::shared_ptr<const RenderJob> renderJob() const;
+
+ private:
+  void prepare();
+  void failLocked(const std::string& message);
+  void enforceBudgetLocked(SteadyClock::time_point now);
+  void finishIfCompleteLocked(SteadyClock::time_point now);
+  void recordErrorLocked(SteadyClock::time_point now, bool force);
+  Status notDoneStatusLocked() const;
+  void log(const std::string& line) const {
+    if (log_) log_("job " + id_ + ": " + line);
+  }
+  double secondsSince(SteadyClock::time_point t, SteadyClock::time_point now) const;
+
+  const std::string id_;
+  const JobSpec spec_;
+  const SteadyClock::duration leaseDuration_;
+  const std::string outputDir_;
+  const SteadyClock::time_point submitted_;
+  const Log log_;
+
+  mutable std::mutex mutex_;
+  mutable std::condition_variable endedSignal_;
+  std::thread preparer_;
+  std::atomic<bool> cancelRequested_{false};
+
+  JobPhase phase_ = JobPhase::kSubmitted;
+  std::string error_;
+  std::shared_ptr<RenderJob> renderJob_;
+  BootstrapResult bootstrap_;
+  std::optional<Image> reference_;
+  std::unique_ptr<ChainScheduler> scheduler_;
+  std::unique_ptr<SplatAggregator> aggregator_;
+  int64_t plannedWork_ = 0;
+  int width_ = 0, height_ = 0;
+  double loadSeconds_ = 0;
+  std::optional<SteadyClock::time_point> renderStarted_, endedAt_;
+  std::vector<ErrorSample> errorSeries_;
+  double metricsSeconds_ = 0;  // time spent computing error metrics, to keep it a small share
+  std::optional<Image> finalImage_;
+  ImageMetadata finalMetadata_;
+  std::string imagePath_;
+};
+
+}  // namespace farm

@@ -1,0 +1,107 @@
+// farm-coordinator: accepts jobs from `farm submit`, bootstraps them, leases chains to
+// farm-worker processes and sums their flushes into the final image.
+#include <pthread.h>
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+
+#include "coordinator/coordinator.h"
+#include "coordinator/grpc_service.h"
+
+namespace {
+
+std::string makeTempDataDir() {
+  std::string pattern =
+      (std::filesystem::temp_directory_path() / "farm-coordinator-XXXXXX").string();
+  if (!mkdtemp(pattern.data())) return "";
+  return pattern;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "farm-coordinator: the render farm's coordinator. Accepts jobs from `farm submit`, runs "
+      "each job's bootstrap, leases its chains to farm-worker processes, sums their flushes in "
+      "double precision and serves progress and the final EXR. Job records are kept in memory "
+      "(a restart forgets jobs); scene files and images are kept under --data."};
+  std::string listen;
+  std::string dataDir;
+  double leaseSeconds = 30;
+  app.add_option("--listen", listen,
+                 "HOST:PORT to serve the client and worker APIs on (port 0: pick a free port; "
+                 "the chosen address is printed on stdout)")
+      ->required();
+  app.add_option("--data", dataDir,
+                 "directory for uploaded scene files and final images (default: a new "
+                 "directory under the system's temporary directory)");
+  app.add_option("--lease-seconds", leaseSeconds,
+                 "how long a chain's lease lives without a flush or renewal before the chain "
+                 "goes to another worker")
+      ->check(CLI::Range(0.5, 3600.0))
+      ->default_str("30");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "farm-coordinator: error: " << e.what() << " (see --help)\n";
+    return 2;
+  }
+
+  const bool temporaryDataDir = dataDir.empty();
+  if (temporaryDataDir) {
+    dataDir = makeTempDataDir();
+    if (dataDir.empty()) {
+      std::cerr << "farm-coordinator: cannot create a data directory under "
+                << std::filesystem::temp_directory_path() << "\n";
+      return 1;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(dataDir, ec);
+  if (ec || !std::filesystem::is_directory(dataDir)) {
+    std::cerr << "farm-coordinator: cannot use data directory '" << dataDir
+              << "': " << (ec ? ec.message() : "not a directory") << "\n";
+    return 1;
+  }
+
+  // SIGINT and SIGTERM are taken by sigwait below; block them before any thread starts so that
+  // every thread inherits the mask and none is interrupted.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  spdlog::set_default_logger(spdlog::stderr_logger_mt("farm-coordinator"));
+  spdlog::set_pattern("[%Y-%m-%d %H:%M:%S.%e] [farm-coordinator] %v");
+  farm::CoordinatorOptions options;
+  options.dataDir = dataDir;
+  options.leaseSeconds = leaseSeconds;
+  options.log = [](const std::string& line) { spdlog::info("{}", line); };
+  farm::Coordinator coordinator(options);
+  std::string error;
+  auto server = farm::CoordinatorServer::start(listen, &coordinator, &error);
+  if (!server) {
+    std::cerr << "farm-coordinator: " << error << "\n";
+    if (temporaryDataDir) std::filesystem::remove_all(dataDir, ec);
+    return 1;
+  }
+  std::string host = listen.substr(0, listen.rfind(':'));
+  std::cout << "farm-coordinator listening on " << host << ":" << server->port() << " (data in "
+            << dataDir << ")" << std::endl;
+
+  int signal = 0;
+  sigwait(&signals, &signal);
+  std::cerr << "farm-coordinator: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
+            << ", shutting down\n";
+  server->shutdown();
+  return 0;
+}

@@ -1,0 +1,50 @@
+#pragma once
+// Sums the chains' splat flushes in double precision, accepting each (chain, flush index)
+// exactly once and in order: a retried upload or a flush from a worker whose lease moved on is a
+// duplicate and changes nothing (DESIGN.md, "The work unit").
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/render/render_job.h"
+
+namespace farm {
+
+enum class FlushOutcome {
+  kAccepted,
+  kDuplicate,     // this (chain, flush index) was accepted before
+  kOutOfOrder,    // a later flush index than the next one expected: an earlier one is missing
+  kUnknownChain,  // chain index out of range
+  kWrongSize,     // width, height or splat count differ from the film
+  kBadValues,     // negative mutations, or a splat that is NaN or infinite
+};
+
+class SplatAggregator {
+ public:
+  SplatAggregator(int width, int height, uint32_t numChains);
+
+  // Adds the flush's splats if it is the next one of its chain; *problem says why not.
+  FlushOutcome add(const ChainFlush& flush, std::string* problem = nullptr);
+
+  // The summed splats (width*height*3), for RenderJob::resolve.
+  const std::vector<double>& sums() const { return sums_; }
+  int64_t workDone() const { return workDone_; }
+  int64_t rejectedSplats() const { return rejectedSplats_; }
+  int64_t rays() const { return rays_; }
+  uint64_t acceptedFlushes() const { return acceptedFlushes_; }
+  // The flush index the chain's next accepted flush must carry.
+  uint32_t nextFlushIndex(uint32_t chain) const { return nextFlush_.at(chain); }
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  int width_, height_;
+  std::vector<double> sums_;
+  std::vector<uint32_t> nextFlush_;
+  int64_t workDone_ = 0;
+  int64_t rejectedSplats_ = 0;
+  int64_t rays_ = 0;
+  uint64_t acceptedFlushes_ = 0;
+};
+
+}  // namespace farm

@@ -1,0 +1,135 @@
+#include "proto/convert.h"
+
+namespace farm {
+
+v1::Algorithm toProto(Algorithm algorithm) {
+  switch (algorithm) {
+    case Algorithm::PathTracing:
+      return v1::PT;
+    case Algorithm::Bidirectional:
+      return v1::BDPT;
+    case Algorithm::PSSMLT:
+      return v1::PSSMLT;
+  }
+  return v1::ALGORITHM_UNSPECIFIED;
+}
+
+bool fromProto(v1::Algorithm algorithm, Algorithm* out, std::string* error) {
+  switch (algorithm) {
+    case v1::PT:
+      *out = Algorithm::PathTracing;
+      return true;
+    case v1::BDPT:
+      *out = Algorithm::Bidirectional;
+      return true;
+    case v1::PSSMLT:
+      *out = Algorithm::PSSMLT;
+      return true;
+    default:
+      *error = "algorithm is unspecified or unknown (value " + std::to_string(int(algorithm)) +
+               "); expected pt, bdpt or pssmlt";
+      return false;
+  }
+}
+
+v1::RenderSettings toProto(const RenderSettings& settings) {
+  v1::RenderSettings m;
+  m.set_algorithm(toProto(settings.algorithm));
+  m.set_width(settings.width);
+  m.set_height(settings.height);
+  m.set_samples_per_pixel(settings.samplesPerPixel);
+  m.set_mutations_per_pixel(settings.mutationsPerPixel);
+  m.set_time_budget_seconds(settings.timeBudgetSeconds);
+  m.set_seed(settings.seed);
+  m.set_max_depth(settings.maxDepth);
+  m.set_bootstrap_samples(settings.bootstrapSamples);
+  m.set_num_chains(settings.numChains);
+  m.set_large_step_probability(settings.largeStepProbability);
+  return m;
+}
+
+bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* error) {
+  RenderSettings s;
+  if (!fromProto(m.algorithm(), &s.algorithm, error)) return false;
+  s.width = m.width();
+  s.height = m.height();
+  s.samplesPerPixel = m.samples_per_pixel();
+  s.mutationsPerPixel = m.mutations_per_pixel();
+  s.timeBudgetSeconds = m.time_budget_seconds();
+  s.seed = m.seed();
+  s.maxDepth = m.max_depth();
+  s.bootstrapSamples = m.bootstrap_samples();
+  s.numChains = m.num_chains();
+  s.largeStepProbability = m.large_step_probability();
+  *out = s;
+  return true;
+}
+
+v1::ChainSpec toProto(const ChainSpec& spec) {
+  v1::ChainSpec m;
+  m.set_job_id(spec.jobId);
+  m.set_chain_index(spec.chainIndex);
+  m.set_algorithm(toProto(spec.algorithm));
+  m.set_seed(spec.seed);
+  m.set_max_depth(spec.maxDepth);
+  m.set_large_step_probability(spec.largeStepProbability);
+  m.set_first_sample(spec.firstSample);
+  m.mutable_seed_sample()->Assign(spec.seedSample.begin(), spec.seedSample.end());
+  m.set_seed_contribution(spec.seedContribution);
+  m.set_budget(spec.budget);
+  m.set_flush_interval(spec.flushInterval);
+  m.set_resume_state(spec.resumeState);
+  m.set_resume_mutations(spec.resumeMutations);
+  m.set_resume_flush_index(spec.resumeFlushIndex);
+  return m;
+}
+
+bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
+  ChainSpec s;
+  if (!fromProto(m.algorithm(), &s.algorithm, error)) return false;
+  s.jobId = m.job_id();
+  s.chainIndex = m.chain_index();
+  s.seed = m.seed();
+  s.maxDepth = m.max_depth();
+  s.largeStepProbability = m.large_step_probability();
+  s.firstSample = m.first_sample();
+  s.seedSample.assign(m.seed_sample().begin(), m.seed_sample().end());
+  s.seedContribution = m.seed_contribution();
+  s.budget = m.budget();
+  s.flushInterval = m.flush_interval();
+  s.resumeState = m.resume_state();
+  s.resumeMutations = m.resume_mutations();
+  s.resumeFlushIndex = m.resume_flush_index();
+  if (s.flushInterval <= 0) {
+    *error = "chain " + std::to_string(s.chainIndex) + " has flush interval " +
+             std::to_string(s.flushInterval) + " (must be > 0)";
+    return false;
+  }
+  *out = s;
+  return true;
+}
+
+const char* phaseName(v1::JobPhase phase) {
+  switch (phase) {
+    case v1::SUBMITTED:
+      return "submitted";
+    case v1::LOADING_SCENE:
+      return "loading-scene";
+    case v1::BOOTSTRAPPING:
+      return "bootstrapping";
+    case v1::RENDERING:
+      return "rendering";
+    case v1::FINISHING:
+      return "finishing";
+    case v1::DONE:
+      return "done";
+    case v1::FAILED:
+      return "failed";
+    case v1::CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown";
+  }
+}
+
+}  // namespace farm

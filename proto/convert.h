@@ -1,0 +1,26 @@
+#pragma once
+// Translation between the wire messages of farm.proto and the renderer's plain structs. The
+// renderer (common/) knows nothing of protobuf; this is the only place the two meet.
+#include <string>
+
+#include "common/render/chain_spec.h"
+#include "common/render/render_settings.h"
+#include "proto/farm.pb.h"
+
+namespace farm {
+
+v1::Algorithm toProto(Algorithm algorithm);
+// False (with *error) for ALGORITHM_UNSPECIFIED or a value this build does not know.
+bool fromProto(v1::Algorithm algorithm, Algorithm* out, std::string* error);
+
+v1::RenderSettings toProto(const RenderSettings& settings);
+// Converts only; the caller still runs RenderSettings::validate().
+bool fromProto(const v1::RenderSettings& message, RenderSettings* out, std::string* error);
+
+v1::ChainSpec toProto(const ChainSpec& spec);
+bool fromProto(const v1::ChainSpec& message, ChainSpec* out, std::string* error);
+
+// Lowercase names of job phases, as `farm status` and `farm list` print them.
+const char* phaseName(v1::JobPhase phase);
+
+}  // namespace farm

@@ -1,0 +1,25 @@
+#pragma once
+// Numbers both ends of the wire must agree on.
+#include <cstddef>
+#include <cstdint>
+
+namespace farm {
+
+// Bumped whenever farm.proto changes incompatibly; RegisterWorker rejects a mismatch.
+inline constexpr uint32_t kProtocolVersion = 1;
+
+// gRPC message size limit, set explicitly on servers and channels (the library default of 4 MiB
+// is implicit and asymmetric between send and receive).
+inline constexpr int kMaxMessageBytes = 16 * 1024 * 1024;
+
+// Bulk data travels in chunks no larger than this: well under kMaxMessageBytes with room for
+// the envelope, and small enough that a stalled stream is noticed quickly.
+inline constexpr size_t kMaxChunkBytes = 1024 * 1024;
+
+// `farm submit` leaves larger files out of a scene bundle (they are almost never scene data).
+inline constexpr uint64_t kMaxBundleFileBytes = 256ull * 1024 * 1024;
+
+// Largest blob the coordinator accepts in an upload (a bundle file or a reference image).
+inline constexpr uint64_t kMaxBlobBytes = kMaxBundleFileBytes;
+
+}  // namespace farm

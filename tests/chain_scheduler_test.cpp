@@ -1,0 +1,91 @@
+#include "coordinator/chain_scheduler.h"
+
+#include <gtest/gtest.h>
+
+namespace farm {
+namespace {
+
+using std::chrono::seconds;
+
+std::vector<ChainSpec> plan(int n) {
+  std::vector<ChainSpec> chains(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    chains[size_t(i)].jobId = "job";
+    chains[size_t(i)].chainIndex = uint32_t(i);
+    chains[size_t(i)].budget = 1000;
+    chains[size_t(i)].flushInterval = 100;
+  }
+  return chains;
+}
+
+TEST(ChainScheduler, LeasesEachChainToOneWorkerAtATime) {
+  ChainScheduler scheduler(plan(3), seconds(10));
+  const auto t0 = SteadyClock::time_point{} + seconds(1000);
+  auto a = scheduler.lease("a", 2, t0);
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a[0].spec.chainIndex, 0u);
+  EXPECT_EQ(a[1].spec.chainIndex, 1u);
+  auto b = scheduler.lease("b", 5, t0);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(b[0].spec.chainIndex, 2u);
+  EXPECT_TRUE(scheduler.lease("c", 5, t0).empty());
+  EXPECT_EQ(scheduler.leasedCount(), 3u);
+  EXPECT_TRUE(scheduler.holds("a", 0, a[0].epoch));
+  EXPECT_FALSE(scheduler.holds("b", 0, a[0].epoch));
+}
+
+TEST(ChainScheduler, ExpiredLeaseResumesAtTheLastAcceptedFlush) {
+  ChainScheduler scheduler(plan(1), seconds(10));
+  const auto t0 = SteadyClock::time_point{} + seconds(1000);
+  auto first = scheduler.lease("a", 1, t0);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_TRUE(first[0].spec.resumeState.empty());
+  EXPECT_EQ(first[0].spec.resumeFlushIndex, 0u);
+
+  // Two flushes arrive, then the worker goes silent.
+  scheduler.recordFlush(0, 0, 100, "state-after-100", false, "a", first[0].epoch, t0 + seconds(5));
+  scheduler.recordFlush(0, 1, 100, "state-after-200", false, "a", first[0].epoch, t0 + seconds(9));
+  // The flush at t0+9 s renewed the lease to t0+19 s.
+  EXPECT_EQ(scheduler.expireLeases(t0 + seconds(18)), 0);
+  EXPECT_EQ(scheduler.expireLeases(t0 + seconds(19)), 1);
+  EXPECT_EQ(scheduler.waitingCount(), 1u);
+
+  auto second = scheduler.lease("b", 1, t0 + seconds(20));
+  ASSERT_EQ(second.size(), 1u);
+  EXPECT_EQ(second[0].spec.chainIndex, 0u);
+  EXPECT_EQ(second[0].spec.resumeState, "state-after-200");
+  EXPECT_EQ(second[0].spec.resumeMutations, 200);
+  EXPECT_EQ(second[0].spec.resumeFlushIndex, 2u);
+  EXPECT_GT(second[0].epoch, first[0].epoch);
+  // The old holder lost the lease; renewals tell it so.
+  EXPECT_FALSE(scheduler.renew("a", 0, first[0].epoch, t0 + seconds(21)));
+  EXPECT_TRUE(scheduler.renew("b", 0, second[0].epoch, t0 + seconds(21)));
+
+  scheduler.recordFlush(0, 2, 800, "done", true, "b", second[0].epoch, t0 + seconds(22));
+  EXPECT_TRUE(scheduler.allFinished());
+  EXPECT_EQ(scheduler.chainMutations(0), 1000);
+}
+
+TEST(ChainScheduler, RenewalKeepsALeaseAlive) {
+  ChainScheduler scheduler(plan(1), seconds(10));
+  const auto t0 = SteadyClock::time_point{} + seconds(1000);
+  auto lease = scheduler.lease("a", 1, t0);
+  ASSERT_TRUE(scheduler.renew("a", 0, lease[0].epoch, t0 + seconds(8)));
+  EXPECT_EQ(scheduler.expireLeases(t0 + seconds(15)), 0);
+  EXPECT_EQ(scheduler.expireLeases(t0 + seconds(18)), 1);
+}
+
+TEST(ChainScheduler, StopEndsWaitingChainsAndExpiredLeases) {
+  ChainScheduler scheduler(plan(3), seconds(10));
+  const auto t0 = SteadyClock::time_point{} + seconds(1000);
+  auto lease = scheduler.lease("a", 1, t0);
+  scheduler.stop();
+  EXPECT_TRUE(scheduler.lease("b", 3, t0).empty());
+  EXPECT_EQ(scheduler.finishedCount(), 2u);
+  EXPECT_FALSE(scheduler.allFinished());
+  scheduler.expireLeases(t0 + seconds(11));
+  EXPECT_TRUE(scheduler.allFinished());
+}
+
+}  // namespace
+}  // namespace farm

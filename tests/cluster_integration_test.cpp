@@ -1,0 +1,199 @@
+// A real farm-coordinator and two real farm-worker processes on loopback render the Cornell
+// box; the EXR fetched from the coordinator must agree with `farm render` of the same job and
+// seed, up to float summation order (DESIGN.md: the image depends on scene, settings, seed and
+// chain budgets only, not on the number of workers).
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <thread>
+
+#include "common/film/image.h"
+#include "tests/test_support.h"
+
+namespace farm::testing {
+namespace {
+
+using std::chrono::seconds;
+
+const std::string kScene = std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml";
+
+struct ClusterCase {
+  std::string algorithm;
+  std::vector<std::string> budget;  // --spp N or --mpp N
+};
+
+void PrintTo(const ClusterCase& c, std::ostream* os) {
+  *os << c.algorithm;
+}
+
+class ClusterTest : public ::testing::TestWithParam<ClusterCase> {};
+
+void expectImagesAgree(const Image& distributed, const Image& embedded) {
+  ASSERT_EQ(distributed.width, embedded.width);
+  ASSERT_EQ(distributed.height, embedded.height);
+  double sumA = 0, sumB = 0, worst = 0;
+  size_t compared = 0;
+  for (size_t i = 0; i < embedded.rgb.size(); ++i) {
+    const double a = distributed.rgb[i], b = embedded.rgb[i];
+    ASSERT_TRUE(std::isfinite(a)) << "pixel value " << i;
+    sumA += a;
+    sumB += b;
+    if (std::abs(b) > 1e-3) {
+      worst = std::max(worst, std::abs(a - b) / std::abs(b));
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, embedded.rgb.size() / 4) << "the image is almost black";
+  EXPECT_LT(worst, 1e-4) << "largest relative difference per pixel value";
+  const double n = double(embedded.rgb.size());
+  EXPECT_NEAR(sumA / n, sumB / n, 1e-5 * std::max(1.0, std::abs(sumB / n)));
+}
+
+TEST_P(ClusterTest, FetchedImageMatchesEmbeddedRender) {
+  const ClusterCase& c = GetParam();
+  ScratchDir scratch("cluster-" + c.algorithm);
+  ASSERT_FALSE(scratch.path().empty());
+  CoordinatorProcess coordinator(scratch.path());
+  ASSERT_TRUE(coordinator.ok()) << coordinator.log();
+
+  std::vector<std::unique_ptr<ChildProcess>> workers;
+  for (int i = 0; i < 2; ++i) {
+    const std::string log = scratch / ("worker" + std::to_string(i) + ".log");
+    workers.push_back(std::make_unique<ChildProcess>(
+        std::vector<std::string>{FARM_WORKER_BIN, "--coordinator", coordinator.address(),
+                                 "--threads", "2", "--cache",
+                                 scratch / ("cache" + std::to_string(i))},
+        log, log));
+  }
+  for (int i = 0; i < 2; ++i) {
+    ASSERT_FALSE(
+        waitForText(scratch / ("worker" + std::to_string(i) + ".log"), "registered", seconds(15))
+            .empty())
+        << "worker " << i << " did not register";
+  }
+
+  std::vector<std::string> settings = {"--algorithm", c.algorithm, "--width", "64",
+                                       "--height",    "48",        "--seed",  "7"};
+  settings.insert(settings.end(), c.budget.begin(), c.budget.end());
+
+  std::vector<std::string> submit = {FARM_CLI_BIN, "submit", "--coordinator", coordinator.address(),
+                                     kScene};
+  submit.insert(submit.end(), settings.begin(), settings.end());
+  CommandResult submitted = runCommand(submit, seconds(60), scratch.path());
+  ASSERT_EQ(submitted.exitCode, 0) << submitted.err;
+  const std::string job = lastLine(submitted.out);
+  ASSERT_EQ(job.rfind("job-", 0), 0u) << "last line of stdout: " << job;
+
+  CommandResult fetched = runCommand({FARM_CLI_BIN, "fetch", "--coordinator", coordinator.address(),
+                                      job, "-o", scratch / "distributed.exr", "--timeout", "120"},
+                                     seconds(130), scratch.path());
+  ASSERT_EQ(fetched.exitCode, 0) << fetched.err << "\n" << coordinator.log();
+
+  CommandResult status =
+      runCommand({FARM_CLI_BIN, "status", "--coordinator", coordinator.address(), job, "--json"},
+                 seconds(30), scratch.path());
+  ASSERT_EQ(status.exitCode, 0) << status.err;
+  EXPECT_NE(status.out.find("\"phase\": \"done\""), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("\"fraction\": 1.0"), std::string::npos) << status.out;
+
+  std::vector<std::string> render = {FARM_CLI_BIN, "render", kScene, "-o", scratch / "embedded.exr",
+                                     "--threads",  "2"};
+  render.insert(render.end(), settings.begin(), settings.end());
+  CommandResult rendered = runCommand(render, seconds(120), scratch.path());
+  ASSERT_EQ(rendered.exitCode, 0) << rendered.err;
+
+  // Both workers did part of the job and leave cleanly on SIGTERM.
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(workers[size_t(i)]->stop(seconds(20)), 0) << "worker " << i;
+    const std::string log = readFile(scratch / ("worker" + std::to_string(i) + ".log"));
+    EXPECT_EQ(log.find("done: 0 chains run"), std::string::npos) << "worker " << i << ":\n" << log;
+  }
+
+  Image distributed, embedded;
+  std::string error;
+  ASSERT_TRUE(readExr(scratch / "distributed.exr", &distributed, &error)) << error;
+  ASSERT_TRUE(readExr(scratch / "embedded.exr", &embedded, &error)) << error;
+  EXPECT_EQ(distributed.width, 64);
+  EXPECT_EQ(distributed.height, 48);
+  expectImagesAgree(distributed, embedded);
+  EXPECT_TRUE(std::filesystem::exists(scratch / "distributed.png"));
+  EXPECT_TRUE(std::filesystem::exists(scratch / "embedded.png"));
+  EXPECT_EQ(coordinator.process().stop(), 0);
+}
+
+// Work accepted so far, from `farm status --json`; -1 if it cannot be read.
+int64_t workDone(const std::string& address, const std::string& job, const std::string& scratch) {
+  CommandResult status = runCommand(
+      {FARM_CLI_BIN, "status", "--coordinator", address, job, "--json"}, seconds(20), scratch);
+  if (status.exitCode != 0) return -1;
+  const std::string key = "\"work_done\": ";
+  const size_t at = status.out.find(key);
+  return at == std::string::npos ? -1 : std::atoll(status.out.c_str() + at + key.size());
+}
+
+// A worker killed in the middle of a job costs its leases' time and nothing else: its chains go
+// to another worker, resume from their last accepted flush, and the image is the same.
+TEST(ClusterFailure, KilledWorkerChangesNothingButTime) {
+  ScratchDir scratch("cluster-kill");
+  CoordinatorProcess coordinator(scratch.path(), /*leaseSeconds=*/1.5);
+  ASSERT_TRUE(coordinator.ok()) << coordinator.log();
+  auto startWorker = [&](const std::string& name) {
+    return std::make_unique<ChildProcess>(
+        std::vector<std::string>{FARM_WORKER_BIN, "--coordinator", coordinator.address(),
+                                 "--threads", "2", "--cache", scratch / ("cache-" + name)},
+        scratch / (name + ".log"), scratch / (name + ".log"));
+  };
+  auto doomed = startWorker("doomed");
+  ASSERT_FALSE(waitForText(scratch / "doomed.log", "registered", seconds(15)).empty());
+
+  // 64x48 at 256 spp over 64 chains: 12288 samples per chain, flushed every 4096.
+  const std::vector<std::string> settings = {
+      "--algorithm", "pt", "--width", "64", "--height", "48", "--spp", "256", "--seed", "3"};
+  std::vector<std::string> submit = {FARM_CLI_BIN, "submit", "--coordinator", coordinator.address(),
+                                     kScene};
+  submit.insert(submit.end(), settings.begin(), settings.end());
+  CommandResult submitted = runCommand(submit, seconds(60), scratch.path());
+  ASSERT_EQ(submitted.exitCode, 0) << submitted.err;
+  const std::string job = lastLine(submitted.out);
+
+  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+  while (workDone(coordinator.address(), job, scratch.path()) <= 0 &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  doomed->signal(SIGKILL);
+  EXPECT_EQ(doomed->wait(seconds(10)), 128 + SIGKILL);
+  const int64_t doneAtKill = workDone(coordinator.address(), job, scratch.path());
+  EXPECT_GT(doneAtKill, 0);
+  EXPECT_LT(doneAtKill, 64 * 48 * 256) << "the worker finished before it could be killed";
+
+  auto survivor = startWorker("survivor");
+  CommandResult fetched = runCommand({FARM_CLI_BIN, "fetch", "--coordinator", coordinator.address(),
+                                      job, "-o", scratch / "distributed.exr", "--timeout", "120"},
+                                     seconds(130), scratch.path());
+  ASSERT_EQ(fetched.exitCode, 0) << fetched.err << "\n" << coordinator.log();
+  EXPECT_EQ(survivor->stop(seconds(20)), 0);
+
+  std::vector<std::string> render = {FARM_CLI_BIN, "render", kScene, "-o", scratch / "embedded.exr",
+                                     "--threads",  "2"};
+  render.insert(render.end(), settings.begin(), settings.end());
+  CommandResult rendered = runCommand(render, seconds(120), scratch.path());
+  ASSERT_EQ(rendered.exitCode, 0) << rendered.err;
+
+  Image distributed, embedded;
+  std::string error;
+  ASSERT_TRUE(readExr(scratch / "distributed.exr", &distributed, &error)) << error;
+  ASSERT_TRUE(readExr(scratch / "embedded.exr", &embedded, &error)) << error;
+  expectImagesAgree(distributed, embedded);
+}
+
+INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterTest,
+                         ::testing::Values(ClusterCase{"pt", {"--spp", "64"}},
+                                           ClusterCase{"pssmlt", {"--mpp", "32"}}),
+                         [](const auto& info) { return info.param.algorithm; });
+
+}  // namespace
+}  // namespace farm::testing

@@ -1,0 +1,38 @@
+#pragma once
+// A ChainSource on the far side of gRPC: registers with a farm-coordinator, leases chains,
+// fetches scene bundles into a SceneCache, uploads flushes in checksummed chunks and renews
+// leases. Retries what can be retried; every call has a deadline. gRPC stays in the .cpp.
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "worker/chain_source.h"
+
+namespace farm {
+
+struct RemoteSourceOptions {
+  std::string coordinator;  // HOST:PORT
+  int threads = 1;          // announced at registration
+  std::string cacheDir;     // scene bundles, by content hash
+  std::string version = "farm-worker";
+  double uploadRetrySeconds = 60;  // give up delivering a flush after this long
+  std::function<void(const std::string&)> log;
+};
+
+class RemoteChainSource final : public ChainSource {
+ public:
+  explicit RemoteChainSource(RemoteSourceOptions options);
+  ~RemoteChainSource() override;
+
+  std::vector<LeasedChain> lease(int max) override;
+  std::shared_ptr<const RenderJob> renderJob(const LeasedChain& chain) override;
+  FlushReceipt upload(const LeasedChain& chain, ChainFlush&& flush) override;
+  std::vector<bool> renew(const std::vector<const LeasedChain*>& chains) override;
+  double renewIntervalSeconds() const override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace farm
