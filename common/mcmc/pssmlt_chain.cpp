@@ -7,6 +7,7 @@
 
 #include "common/film/splat_buffer.h"
 #include "common/mcmc/primary_sample_sampler.h"
+#include "common/render/chain_flusher.h"
 #include "common/transport/bidirectional.h"
 
 namespace farm {
@@ -81,34 +82,14 @@ void runPssmltChain(const Scene& scene, const ChainSpec& spec,
                              ": the seed path carries no light on this host");
   }
 
-  SplatBuffer film(camera.width(), camera.height(), scene.description().camera.filter);
-  int64_t done = spec.resumeMutations;
-  int64_t sinceFlush = 0;
-  uint32_t flushIndex = spec.resumeFlushIndex;
-  uint64_t raysAtFlush = 0;
-  const int64_t interval = std::max<int64_t>(1, spec.flushInterval);
-  auto flush = [&](bool finished) {
-    ChainFlush f;
-    f.chainIndex = spec.chainIndex;
-    f.flushIndex = flushIndex++;
-    f.mutations = sinceFlush;
-    f.width = camera.width();
-    f.height = camera.height();
-    f.splats = film.data();
-    f.rejectedSplats = rejected;
-    f.rays = int64_t(tracer.rays() - raysAtFlush);
-    raysAtFlush = tracer.rays();
-    f.state = sampler.serialize();
-    f.finished = finished;
-    film.clear();
-    sinceFlush = 0;
-    rejected = 0;
-    return onFlush(std::move(f));
-  };
-
-  while (spec.budget < 0 || done < spec.budget) {
+  ChainFlusher flusher(spec, scene, onFlush);
+  SplatBuffer& film = flusher.film();
+  flusher.rejectSplats(rejected);
+  while (flusher.budgetLeft()) {
     sampler.startIteration();
-    double proposedI = tracePath(tracer, camera, sampler, &proposed, &rejected);
+    int64_t dropped = 0;
+    double proposedI = tracePath(tracer, camera, sampler, &proposed, &dropped);
+    flusher.rejectSplats(dropped);
     // Acceptance a = min(1, I(y) / I(x)) (Kelemen et al. 2002, eq. 6, symmetric proposals).
     double a = proposedI >= currentI ? 1.0 : proposedI / currentI;
     if (a > 0) {
@@ -126,12 +107,7 @@ void runPssmltChain(const Scene& scene, const ChainSpec& spec,
     } else {
       sampler.reject();
     }
-    ++done;
-    ++sinceFlush;
-    bool finished = spec.budget >= 0 && done >= spec.budget;
-    if (sinceFlush >= interval || finished) {
-      if (!flush(finished)) return;
-    }
+    if (!flusher.countMutation(tracer.rays(), [&] { return sampler.serialize(); })) return;
   }
 }
 

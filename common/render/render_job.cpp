@@ -9,6 +9,7 @@
 #include "common/film/splat_buffer.h"
 #include "common/mcmc/bootstrap.h"
 #include "common/mcmc/pssmlt_chain.h"
+#include "common/render/chain_flusher.h"
 #include "common/scene/film_override.h"
 #include "common/scene/loaders/mitsuba_loader.h"
 #include "common/scene/scene.h"
@@ -41,14 +42,10 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
   const int64_t pixels = int64_t(camera.width()) * camera.height();
   PathTracer pt(scene, spec.maxDepth);
   BidirectionalTracer bdpt(scene, spec.maxDepth);
-  SplatBuffer film(camera.width(), camera.height(), scene.description().camera.filter);
+  ChainFlusher flusher(spec, scene, onFlush);
   std::vector<Splat> splats;
-  int64_t done = spec.resumeMutations, sinceFlush = 0, rejected = 0;
-  uint32_t flushIndex = spec.resumeFlushIndex;
-  uint64_t raysAtFlush = 0;
-  const int64_t interval = std::max<int64_t>(1, spec.flushInterval);
-  while (spec.budget < 0 || done < spec.budget) {
-    const int64_t k = spec.firstSample + done;
+  while (flusher.budgetLeft()) {
+    const int64_t k = spec.firstSample + flusher.done();
     Rng rng(spec.seed, streamId(kSampleDomain, uint64_t(k)));
     IndependentSampler sampler(&rng);
     Vec2f p;
@@ -68,31 +65,14 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
       bdpt.sample(p, sampler, &splats);
     for (const Splat& s : splats) {
       if (isValidRadiance(s.value))
-        film.add(s.film, s.value);
+        flusher.film().add(s.film, s.value);
       else
-        ++rejected;
+        flusher.rejectSplats();
     }
-    ++done;
-    ++sinceFlush;
-    bool finished = spec.budget >= 0 && done >= spec.budget;
-    if (sinceFlush >= interval || finished) {
-      ChainFlush f;
-      f.chainIndex = spec.chainIndex;
-      f.flushIndex = flushIndex++;
-      f.mutations = sinceFlush;
-      f.width = camera.width();
-      f.height = camera.height();
-      f.splats = film.data();
-      f.rejectedSplats = rejected;
-      uint64_t rays = pt.rays() + bdpt.rays();
-      f.rays = int64_t(rays - raysAtFlush);
-      raysAtFlush = rays;
-      f.state = std::to_string(done);
-      f.finished = finished;
-      film.clear();
-      sinceFlush = 0;
-      rejected = 0;
-      if (!onFlush(std::move(f))) return;
+    const int64_t doneAfter = flusher.done() + 1;
+    if (!flusher.countMutation(pt.rays() + bdpt.rays(),
+                               [&] { return std::to_string(doneAfter); })) {
+      return;
     }
   }
 }

@@ -1,0 +1,39 @@
+#include "common/render/chain_flusher.h"
+
+#include <algorithm>
+
+namespace farm {
+
+ChainFlusher::ChainFlusher(const ChainSpec& spec, const Scene& scene,
+                           const std::function<bool(ChainFlush&&)>& onFlush)
+    : spec_(spec),
+      onFlush_(onFlush),
+      film_(scene.camera().width(), scene.camera().height(), scene.description().camera.filter),
+      done_(spec.resumeMutations),
+      interval_(std::max<int64_t>(1, spec.flushInterval)),
+      flushIndex_(spec.resumeFlushIndex) {}
+
+bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::string()>& state) {
+  ++done_;
+  ++sinceFlush_;
+  const bool finished = spec_.budget >= 0 && done_ >= spec_.budget;
+  if (sinceFlush_ < interval_ && !finished) return true;
+  ChainFlush f;
+  f.chainIndex = spec_.chainIndex;
+  f.flushIndex = flushIndex_++;
+  f.mutations = sinceFlush_;
+  f.width = film_.width();
+  f.height = film_.height();
+  f.splats = film_.data();
+  f.rejectedSplats = rejected_;
+  f.rays = int64_t(raysTraced - raysAtFlush_);
+  f.state = state();
+  f.finished = finished;
+  raysAtFlush_ = raysTraced;
+  film_.clear();
+  sinceFlush_ = 0;
+  rejected_ = 0;
+  return onFlush_(std::move(f));
+}
+
+}  // namespace farm

@@ -1,0 +1,40 @@
+#pragma once
+// The flush protocol of DESIGN.md in one place: a chain's splats accumulate here between
+// flushes, and every spec.flushInterval mutations (and when the budget is spent) they go out as
+// a ChainFlush with the count they cover and the chain's state, so that another worker can
+// resume exactly there.
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "common/film/splat_buffer.h"
+#include "common/render/render_job.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+
+class ChainFlusher {
+ public:
+  ChainFlusher(const ChainSpec& spec, const Scene& scene,
+               const std::function<bool(ChainFlush&&)>& onFlush);
+
+  SplatBuffer& film() { return film_; }
+  // Splats dropped at the source (NaN, Inf or negative), reported with the next flush.
+  void rejectSplats(int64_t n = 1) { rejected_ += n; }
+  // Mutations (or samples) done so far, resumed ones included.
+  int64_t done() const { return done_; }
+  bool budgetLeft() const { return spec_.budget < 0 || done_ < spec_.budget; }
+  // Counts one mutation and flushes when one is due; raysTraced is the chain's running total
+  // and state() the chain's resumable state. False when the receiver says stop.
+  bool countMutation(uint64_t raysTraced, const std::function<std::string()>& state);
+
+ private:
+  const ChainSpec& spec_;
+  const std::function<bool(ChainFlush&&)>& onFlush_;
+  SplatBuffer film_;
+  int64_t done_, sinceFlush_ = 0, rejected_ = 0, interval_;
+  uint32_t flushIndex_;
+  uint64_t raysAtFlush_ = 0;
+};
+
+}  // namespace farm
