@@ -1,5 +1,7 @@
 #include "coordinator/chain_scheduler.h"
 
+#include <algorithm>
+
 namespace farm {
 
 ChainScheduler::ChainScheduler(std::vector<ChainSpec> chains, SteadyClock::duration leaseDuration)
@@ -20,9 +22,16 @@ std::vector<ChainLease> ChainScheduler::lease(const std::string& worker, int max
                                               SteadyClock::time_point now) {
   std::vector<ChainLease> leases;
   if (stopping_) return leases;
-  for (Chain& chain : chains_) {
+  std::vector<uint32_t> waiting;
+  for (uint32_t i = 0; i < chains_.size(); ++i) {
+    if (chains_[i].state == State::kWaiting) waiting.push_back(i);
+  }
+  std::stable_sort(waiting.begin(), waiting.end(), [&](uint32_t a, uint32_t b) {
+    return chains_[a].mutationsDone < chains_[b].mutationsDone;
+  });
+  for (uint32_t index : waiting) {
     if (int(leases.size()) >= max) break;
-    if (chain.state != State::kWaiting) continue;
+    Chain& chain = chains_[index];
     chain.state = State::kLeased;
     chain.holder = worker;
     ++chain.epoch;
@@ -68,6 +77,13 @@ void ChainScheduler::recordFlush(uint32_t chain, uint32_t flushIndex, int64_t mu
 
 void ChainScheduler::finishChain(uint32_t chain) {
   finish(chains_.at(chain));
+}
+
+void ChainScheduler::yieldChain(uint32_t chain) {
+  Chain& c = chains_.at(chain);
+  if (c.state != State::kLeased) return;
+  c.state = State::kWaiting;
+  c.holder.clear();
 }
 
 void ChainScheduler::finish(Chain& chain) {

@@ -27,7 +27,8 @@ class ChainScheduler {
   uint32_t chainCount() const { return uint32_t(chains_.size()); }
   bool hasChain(uint32_t chain) const { return chain < chains_.size(); }
 
-  // Leases up to `max` waiting chains (lowest index first) to `worker`.
+  // Leases up to `max` waiting chains to `worker`: those with the least work done first (then
+  // the lowest index), so that time-sliced chains advance evenly.
   std::vector<ChainLease> lease(const std::string& worker, int max, SteadyClock::time_point now);
   // True when `worker` holds the chain's current lease `epoch`.
   bool holds(const std::string& worker, uint32_t chain, uint64_t epoch) const;
@@ -42,6 +43,10 @@ class ChainScheduler {
                    SteadyClock::time_point now);
   // Ends a chain early (the job's time budget is spent and the chain was told to stop).
   void finishChain(uint32_t chain);
+  // Takes a chain back from its holder (who was told to stop it) and queues it again; the next
+  // lease resumes it from its last accepted flush. How chains without a budget (time-limited
+  // jobs) share fewer threads than there are chains.
+  void yieldChain(uint32_t chain);
 
   // Puts chains whose lease expired back in the queue (or, once stopping, ends them). Returns
   // the number of leases that expired.

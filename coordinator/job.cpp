@@ -235,6 +235,13 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       ack->stop = true;
       ack->reason = "this worker no longer holds the lease of chain " + std::to_string(chain) +
                     " (it expired, moved to another worker, or the chain finished)";
+    } else if (outcome == FlushOutcome::kAccepted && scheduler_->waitingCount() > 0 &&
+               flush.mutations > 0 && spec_.settings.timeBudgetSeconds > 0) {
+      // A chain without a budget would keep its thread until the time is up, and the others
+      // would never run: time-slice them at flush boundaries (the chain resumes exactly).
+      ack->stop = true;
+      ack->reason = "chain " + std::to_string(chain) + " yields to waiting chains";
+      scheduler_->yieldChain(chain);
     }
   }
   if (outcome == FlushOutcome::kAccepted) recordErrorLocked(now, false);

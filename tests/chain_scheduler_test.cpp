@@ -87,5 +87,37 @@ TEST(ChainScheduler, StopEndsWaitingChainsAndExpiredLeases) {
   EXPECT_TRUE(scheduler.allFinished());
 }
 
+TEST(ChainScheduler, YieldedChainsTakeTurnsLeastWorkFirst) {
+  // Time-limited jobs have more chains than threads: a chain that yields goes back in the queue
+  // and the chain with the least work done is leased next, resuming where it stopped.
+  std::vector<ChainSpec> chains = plan(3);
+  for (ChainSpec& c : chains) c.budget = -1;
+  ChainScheduler scheduler(chains, seconds(10));
+  const auto t0 = SteadyClock::time_point{} + seconds(1000);
+  auto a = scheduler.lease("a", 1, t0);
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].spec.chainIndex, 0u);
+  scheduler.recordFlush(0, 0, 100, "chain0-after-100", false, "a", a[0].epoch, t0);
+  scheduler.yieldChain(0);
+  EXPECT_FALSE(scheduler.holds("a", 0, a[0].epoch));
+  EXPECT_EQ(scheduler.waitingCount(), 3u);
+  auto next = scheduler.lease("a", 1, t0);
+  ASSERT_EQ(next.size(), 1u);
+  EXPECT_EQ(next[0].spec.chainIndex, 1u);  // chain 0 has done more
+  scheduler.recordFlush(1, 0, 100, "chain1-after-100", false, "a", next[0].epoch, t0);
+  scheduler.yieldChain(1);
+  next = scheduler.lease("a", 1, t0);
+  ASSERT_EQ(next.size(), 1u);
+  EXPECT_EQ(next[0].spec.chainIndex, 2u);
+  scheduler.recordFlush(2, 0, 100, "chain2-after-100", false, "a", next[0].epoch, t0);
+  scheduler.yieldChain(2);
+  next = scheduler.lease("a", 1, t0);
+  ASSERT_EQ(next.size(), 1u);
+  EXPECT_EQ(next[0].spec.chainIndex, 0u);
+  EXPECT_EQ(next[0].spec.resumeState, "chain0-after-100");
+  EXPECT_EQ(next[0].spec.resumeMutations, 100);
+  EXPECT_EQ(next[0].spec.resumeFlushIndex, 1u);
+}
+
 }  // namespace
 }  // namespace farm
