@@ -44,6 +44,7 @@ FlushReceipt LocalChainSource::upload(const LeasedChain& chain, ChainFlush&& flu
   receipt.duplicate = ack.result == FlushAck::Result::kDuplicate;
   receipt.stop = ack.stop || ack.result == FlushAck::Result::kDiscarded;
   receipt.reason = ack.reason;
+  receipt.yielded = ack.yielded;
   return receipt;
 }
 

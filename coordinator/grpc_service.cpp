@@ -557,6 +557,7 @@ class WorkerService final : public v1::WorkerApi::Service {
     }
     response->set_stop(ack.stop);
     response->set_reason(ack.reason);
+    response->set_yielded(ack.yielded);
     return grpc::Status::OK;
   }
 

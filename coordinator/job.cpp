@@ -241,6 +241,7 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       // would never run: time-slice them at flush boundaries (the chain resumes exactly).
       ack->stop = true;
       ack->reason = "chain " + std::to_string(chain) + " yields to waiting chains";
+      ack->yielded = true;
       scheduler_->yieldChain(chain);
     }
   }

@@ -81,8 +81,9 @@ struct WorkerLease {
 struct FlushAck {
   enum class Result { kAccepted, kDuplicate, kDiscarded };
   Result result = Result::kAccepted;
-  bool stop = false;   // the chain should stop
-  std::string reason;  // why it should stop
+  bool stop = false;     // the chain should stop
+  std::string reason;    // why it should stop
+  bool yielded = false;  // stop only to let waiting chains run (not an error)
 };
 
 class Job {

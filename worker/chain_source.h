@@ -26,6 +26,7 @@ struct FlushReceipt {
   bool duplicate = false;  // was added before (a retried upload)
   bool stop = false;       // the chain should stop
   std::string reason;      // why it should stop
+  bool yielded = false;    // stopped only to let waiting chains run: nothing to report
 };
 
 // The source cannot be reached now; the caller backs off and tries again.

@@ -294,6 +294,7 @@ FlushReceipt RemoteChainSource::upload(const LeasedChain& chain, ChainFlush&& fl
       receipt.duplicate = response.result() == v1::UploadFlushResponse::DUPLICATE;
       receipt.stop = response.stop() || response.result() == v1::UploadFlushResponse::DISCARDED;
       receipt.reason = response.reason();
+      receipt.yielded = response.yielded();
       return receipt;
     }
     if (Impl::forgotWorker(status) && !reregistered) {

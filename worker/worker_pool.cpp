@@ -48,23 +48,26 @@ void WorkerPool::runTask(Task* task) {
   bool failed = false;
   try {
     std::shared_ptr<const RenderJob> job = source_->renderJob(chain);
-    job->runChain(chain.spec, [&](ChainFlush&& flush) {
-      const int64_t work = flush.mutations;
-      FlushReceipt receipt = source_->upload(chain, std::move(flush));
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (receipt.accepted) {
-          ++stats_.flushesAccepted;
-          stats_.work += work;
-        }
-        if (receipt.duplicate) ++stats_.flushesDuplicate;
-      }
-      if (receipt.stop) {
-        log(chainName(chain) + " stops: " + receipt.reason);
-        return false;
-      }
-      return !task->stop.load();
-    });
+    job->runChain(
+        chain.spec,
+        [&](ChainFlush&& flush) {
+          const int64_t work = flush.mutations;
+          FlushReceipt receipt = source_->upload(chain, std::move(flush));
+          {
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (receipt.accepted) {
+              ++stats_.flushesAccepted;
+              stats_.work += work;
+            }
+            if (receipt.duplicate) ++stats_.flushesDuplicate;
+          }
+          if (receipt.stop) {
+            if (!receipt.yielded) log(chainName(chain) + " stops: " + receipt.reason);
+            return false;
+          }
+          return !task->stop.load();
+        },
+        &task->stop);
   } catch (const std::exception& e) {
     failed = true;
     log(chainName(chain) + " failed: " + e.what());

@@ -53,7 +53,8 @@ double seedContributionOf(const Scene& scene, const ChainSpec& spec) {
 }
 
 void runPssmltChain(const Scene& scene, const ChainSpec& spec,
-                    const std::function<bool(ChainFlush&&)>& onFlush) {
+                    const std::function<bool(ChainFlush&&)>& onFlush,
+                    const std::atomic<bool>* cancel) {
   const Camera& camera = scene.camera();
   BidirectionalTracer tracer(scene, spec.maxDepth);
   PrimarySampleSampler sampler(spec.seed, streamId(kChainDomain, spec.chainIndex),
@@ -82,7 +83,7 @@ void runPssmltChain(const Scene& scene, const ChainSpec& spec,
                              ": the seed path carries no light on this host");
   }
 
-  ChainFlusher flusher(spec, scene, onFlush);
+  ChainFlusher flusher(spec, scene, onFlush, cancel);
   SplatBuffer& film = flusher.film();
   flusher.rejectSplats(rejected);
   while (flusher.budgetLeft()) {

@@ -3,6 +3,7 @@
 // expected-value splatting: each iteration splats the proposal with weight a / I(proposal) and
 // the current state with (1 - a) / I(current), so the film holds sum of f / I and the image is
 // Z / M times it (Veach 1997, eq. 11.7 with the normalization of ../shared/DESIGN.md).
+#include <atomic>
 #include <cstdint>
 #include <functional>
 
@@ -17,6 +18,7 @@ namespace farm {
 double seedContributionOf(const Scene& scene, const ChainSpec& spec);
 
 void runPssmltChain(const Scene& scene, const ChainSpec& spec,
-                    const std::function<bool(ChainFlush&&)>& onFlush);
+                    const std::function<bool(ChainFlush&&)>& onFlush,
+                    const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace farm

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+
 #include "common/mcmc/bootstrap.h"
 #include "common/mcmc/primary_sample_sampler.h"
 #include "common/render/render_job.h"
@@ -112,6 +114,26 @@ TEST(PssmltChain, ResumedChainContinuesExactly) {
   ChainSpec corrupt = spec;
   corrupt.resumeState = "garbage";
   EXPECT_THROW(job.runChain(corrupt, [](ChainFlush&&) { return true; }), std::runtime_error);
+}
+
+TEST(PssmltChain, CancelStopsBeforeTheNextFlush) {
+  RenderSettings s = smallSettings();
+  auto scene = loadScene(kCornell, s);
+  RenderJob job(scene, s, "cancel");
+  ChainSpec spec = job.planChains(job.bootstrap())[0];
+  spec.budget = 1000000;
+  spec.flushInterval = 1000;
+  std::atomic<bool> cancel{false};
+  int flushes = 0;
+  job.runChain(
+      spec,
+      [&](ChainFlush&&) {
+        ++flushes;
+        cancel = true;  // e.g. the worker is shutting down
+        return true;
+      },
+      &cancel);
+  EXPECT_EQ(flushes, 1);
 }
 
 TEST(PssmltChain, NoLightGivesAClearError) {

@@ -5,9 +5,11 @@
 namespace farm {
 
 ChainFlusher::ChainFlusher(const ChainSpec& spec, const Scene& scene,
-                           const std::function<bool(ChainFlush&&)>& onFlush)
+                           const std::function<bool(ChainFlush&&)>& onFlush,
+                           const std::atomic<bool>* cancel)
     : spec_(spec),
       onFlush_(onFlush),
+      cancel_(cancel),
       film_(scene.camera().width(), scene.camera().height(), scene.description().camera.filter),
       done_(spec.resumeMutations),
       interval_(std::max<int64_t>(1, spec.flushInterval)),

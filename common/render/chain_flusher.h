@@ -3,6 +3,7 @@
 // flushes, and every spec.flushInterval mutations (and when the budget is spent) they go out as
 // a ChainFlush with the count they cover and the chain's state, so that another worker can
 // resume exactly there.
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -16,14 +17,19 @@ namespace farm {
 class ChainFlusher {
  public:
   ChainFlusher(const ChainSpec& spec, const Scene& scene,
-               const std::function<bool(ChainFlush&&)>& onFlush);
+               const std::function<bool(ChainFlush&&)>& onFlush,
+               const std::atomic<bool>* cancel = nullptr);
 
   SplatBuffer& film() { return film_; }
   // Splats dropped at the source (NaN, Inf or negative), reported with the next flush.
   void rejectSplats(int64_t n = 1) { rejected_ += n; }
   // Mutations (or samples) done so far, resumed ones included.
   int64_t done() const { return done_; }
-  bool budgetLeft() const { return spec_.budget < 0 || done_ < spec_.budget; }
+  // More to do: budget left and not cancelled.
+  bool budgetLeft() const {
+    if (cancel_ && cancel_->load(std::memory_order_relaxed)) return false;
+    return spec_.budget < 0 || done_ < spec_.budget;
+  }
   // Counts one mutation and flushes when one is due; raysTraced is the chain's running total
   // and state() the chain's resumable state. False when the receiver says stop.
   bool countMutation(uint64_t raysTraced, const std::function<std::string()>& state);
@@ -31,6 +37,7 @@ class ChainFlusher {
  private:
   const ChainSpec& spec_;
   const std::function<bool(ChainFlush&&)>& onFlush_;
+  const std::atomic<bool>* cancel_;
   SplatBuffer film_;
   int64_t done_, sinceFlush_ = 0, rejected_ = 0, interval_;
   uint32_t flushIndex_;

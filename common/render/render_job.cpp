@@ -37,12 +37,13 @@ std::string formatDouble(double v) {
 // by order); with a time budget the film point is uniform over the image, so that stopping at
 // any count leaves the image unbiased.
 void runSampleChain(const Scene& scene, const ChainSpec& spec,
-                    const std::function<bool(ChainFlush&&)>& onFlush) {
+                    const std::function<bool(ChainFlush&&)>& onFlush,
+                    const std::atomic<bool>* cancel) {
   const Camera& camera = scene.camera();
   const int64_t pixels = int64_t(camera.width()) * camera.height();
   PathTracer pt(scene, spec.maxDepth);
   BidirectionalTracer bdpt(scene, spec.maxDepth);
-  ChainFlusher flusher(spec, scene, onFlush);
+  ChainFlusher flusher(spec, scene, onFlush, cancel);
   std::vector<Splat> splats;
   while (flusher.budgetLeft()) {
     const int64_t k = spec.firstSample + flusher.done();
@@ -186,12 +187,12 @@ double RenderJob::imageScale(const BootstrapResult& bootstrap, int64_t workDone)
   return 1.0 / double(workDone);
 }
 
-void RenderJob::runChain(const ChainSpec& spec,
-                         const std::function<bool(ChainFlush&&)>& onFlush) const {
+void RenderJob::runChain(const ChainSpec& spec, const std::function<bool(ChainFlush&&)>& onFlush,
+                         const std::atomic<bool>* cancel) const {
   if (isMarkovChain(spec.algorithm))
-    runPssmltChain(*scene_, spec, onFlush);
+    runPssmltChain(*scene_, spec, onFlush, cancel);
   else
-    runSampleChain(*scene_, spec, onFlush);
+    runSampleChain(*scene_, spec, onFlush, cancel);
 }
 
 namespace {

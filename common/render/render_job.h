@@ -70,8 +70,11 @@ class RenderJob {
   double imageScale(const BootstrapResult& bootstrap, int64_t workDone) const;
 
   // Worker: runs a chain to its budget (or until onFlush returns false), calling onFlush every
-  // spec.flushInterval mutations and once at the end. Deterministic for a given spec.
-  void runChain(const ChainSpec& spec, const std::function<bool(ChainFlush&&)>& onFlush) const;
+  // spec.flushInterval mutations and once at the end. Deterministic for a given spec. When
+  // *cancel becomes true the chain returns at once, dropping the work since its last flush (the
+  // chain resumes from that flush's state).
+  void runChain(const ChainSpec& spec, const std::function<bool(ChainFlush&&)>& onFlush,
+                const std::atomic<bool>* cancel = nullptr) const;
 
   // Image from summed splats (double) and the scale above.
   Image resolve(const std::vector<double>& sums, double scale) const;
