@@ -31,6 +31,17 @@ void PrintTo(const ClusterCase& c, std::ostream* os) {
 
 class ClusterTest : public ::testing::TestWithParam<ClusterCase> {};
 
+// `farm submit` of the Cornell box with `settings`; the job id (the last line of stdout), or
+// the command's error output when it failed.
+std::string submitJob(const std::string& address, const std::vector<std::string>& settings,
+                      const std::string& scratch) {
+  std::vector<std::string> submit = {FARM_CLI_BIN, "submit", "--coordinator", address, kScene};
+  submit.insert(submit.end(), settings.begin(), settings.end());
+  CommandResult submitted = runCommand(submit, std::chrono::seconds(60), scratch);
+  if (submitted.exitCode != 0) return "farm submit failed: " + submitted.err;
+  return lastLine(submitted.out);
+}
+
 void expectImagesAgree(const Image& distributed, const Image& embedded) {
   ASSERT_EQ(distributed.width, embedded.width);
   ASSERT_EQ(distributed.height, embedded.height);
@@ -79,12 +90,7 @@ TEST_P(ClusterTest, FetchedImageMatchesEmbeddedRender) {
                                        "--height",    "48",        "--seed",  "7"};
   settings.insert(settings.end(), c.budget.begin(), c.budget.end());
 
-  std::vector<std::string> submit = {FARM_CLI_BIN, "submit", "--coordinator", coordinator.address(),
-                                     kScene};
-  submit.insert(submit.end(), settings.begin(), settings.end());
-  CommandResult submitted = runCommand(submit, seconds(60), scratch.path());
-  ASSERT_EQ(submitted.exitCode, 0) << submitted.err;
-  const std::string job = lastLine(submitted.out);
+  const std::string job = submitJob(coordinator.address(), settings, scratch.path());
   ASSERT_EQ(job.rfind("job-", 0), 0u) << "last line of stdout: " << job;
 
   CommandResult fetched = runCommand({FARM_CLI_BIN, "fetch", "--coordinator", coordinator.address(),
@@ -152,12 +158,8 @@ TEST(ClusterFailure, KilledWorkerChangesNothingButTime) {
   // 64x48 at 256 spp over 64 chains: 12288 samples per chain, flushed every 4096.
   const std::vector<std::string> settings = {
       "--algorithm", "pt", "--width", "64", "--height", "48", "--spp", "256", "--seed", "3"};
-  std::vector<std::string> submit = {FARM_CLI_BIN, "submit", "--coordinator", coordinator.address(),
-                                     kScene};
-  submit.insert(submit.end(), settings.begin(), settings.end());
-  CommandResult submitted = runCommand(submit, seconds(60), scratch.path());
-  ASSERT_EQ(submitted.exitCode, 0) << submitted.err;
-  const std::string job = lastLine(submitted.out);
+  const std::string job = submitJob(coordinator.address(), settings, scratch.path());
+  ASSERT_EQ(job.rfind("job-", 0), 0u) << "last line of stdout: " << job;
 
   const auto deadline = std::chrono::steady_clock::now() + seconds(60);
   while (workDone(coordinator.address(), job, scratch.path()) <= 0 &&
