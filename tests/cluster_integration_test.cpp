@@ -194,6 +194,7 @@ TEST(ClusterFailure, KilledWorkerChangesNothingButTime) {
 
 INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterTest,
                          ::testing::Values(ClusterCase{"pt", {"--spp", "64"}},
+                                           ClusterCase{"bdpt", {"--spp", "16"}},
                                            ClusterCase{"pssmlt", {"--mpp", "32"}}),
                          [](const auto& info) { return info.param.algorithm; });
 
