@@ -142,18 +142,27 @@ SceneDescription irradianceScene() {
   return d;
 }
 
-// Radiance of the floor at p: rho / pi * E with E = pi Le r^2 h / d^3.
-double floorRadiance(const Vec3f& p) {
+// Radiance of the floor seen through film point `film`: rho / pi * E at the floor point, with
+// E = pi Le r^2 h / d^3.
+double floorRadiance(const Camera& cam, const Vec2f& film) {
+  Ray ray = cam.generateRay(film);
+  Vec3f p = ray.o + ray.d * (-ray.o.y / ray.d.y);
   double dist = length(p - Vec3f(0, kHeight, 0));
   return kRho * kLe * kRadius * kRadius * kHeight / (dist * dist * dist);
 }
 
-void expectIrradiance(Algorithm algorithm) {
-  const float rho = kRho, h = kHeight, radius = kRadius, le = kLe;
-  SceneDescription d = irradianceScene();
-  const ShapeDescription& light = d.shapes[1];
-  auto scene = std::make_shared<Scene>(d);
+// The analytic radiance averaged over pixel (x, y) (a box filter), on a g x g grid.
+double pixelFootprintRadiance(const Camera& cam, int x, int y, int g) {
+  double sum = 0;
+  for (int j = 0; j < g; ++j) {
+    for (int i = 0; i < g; ++i)
+      sum += floorRadiance(cam, Vec2f(x + (i + 0.5f) / g, y + (j + 0.5f) / g));
+  }
+  return sum / (g * g);
+}
 
+void expectIrradiance(Algorithm algorithm) {
+  auto scene = std::make_shared<Scene>(irradianceScene());
   RenderSettings settings;
   settings.algorithm = algorithm;
   settings.samplesPerPixel = 256;
@@ -162,56 +171,29 @@ void expectIrradiance(Algorithm algorithm) {
   RenderJob job(scene, settings, "irradiance");
   LocalRenderResult r = renderLocally(job);
 
-  // Expected value of each pixel: the analytic radiance averaged over the pixel's footprint
-  // (box filter), integrated numerically on a fine grid.
+  // Each pixel's expectation is the analytic radiance averaged over its footprint; the spread
+  // of the pixels around their expectations gives the standard error of the image mean.
   const Camera& cam = scene->camera();
-  double sumErr2 = 0;
-  const int n = 16 * 16;
-  for (int y = 0; y < 16; ++y) {
-    for (int x = 0; x < 16; ++x) {
-      double expected = 0;
-      const int g = 8;
-      for (int j = 0; j < g; ++j) {
-        for (int i = 0; i < g; ++i) {
-          Ray ray = cam.generateRay(Vec2f(x + (i + 0.5f) / g, y + (j + 0.5f) / g));
-          float t = -ray.o.y / ray.d.y;
-          Vec3f p = ray.o + ray.d * t;
-          double dist = length(p - light.center);
-          expected += rho / kPi * kPi * le * radius * radius * h / (dist * dist * dist);
-        }
-      }
-      expected /= g * g;
+  const int n = cam.width() * cam.height();
+  double sumErr2 = 0, meanRendered = 0, meanExpected = 0;
+  for (int y = 0; y < cam.height(); ++y) {
+    for (int x = 0; x < cam.width(); ++x) {
+      double expected = pixelFootprintRadiance(cam, x, y, 8);
       double v = r.image.at(x, y).y;
       sumErr2 += (v - expected) * (v - expected);
+      meanRendered += v;
+      meanExpected += expected;
     }
   }
-  // The mean signed error over pixels must vanish within its standard error.
-  double meanSigned = 0, meanExpected = 0;
-  for (int y = 0; y < 16; ++y) {
-    for (int x = 0; x < 16; ++x) meanSigned += r.image.at(x, y).y;
-  }
-  meanSigned /= n;
-  {
-    double e = 0;
-    for (int y = 0; y < 16; ++y) {
-      for (int x = 0; x < 16; ++x) {
-        Ray ray = cam.generateRay(Vec2f(x + 0.5f, y + 0.5f));
-        float t = -ray.o.y / ray.d.y;
-        Vec3f p = ray.o + ray.d * t;
-        double dist = length(p - light.center);
-        e += rho * le * radius * radius * h / (dist * dist * dist);
-      }
-    }
-    meanExpected = e / n;
-  }
-  double rmsErr = std::sqrt(sumErr2 / n);
-  double se = rmsErr / std::sqrt(double(n));
+  meanRendered /= n;
+  meanExpected /= n;
+  double se = std::sqrt(sumErr2 / n) / std::sqrt(double(n));
   if (isMarkovChain(algorithm)) {
     double zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
     se = std::sqrt(se * se + std::pow(meanExpected * zRel, 2));
   }
-  // Pixel-centre versus footprint average differs by far less than the noise at 10 degrees.
-  EXPECT_NEAR(meanSigned, meanExpected, 4 * se + 1e-3 * meanExpected) << algorithmName(algorithm);
+  // The 1e-3 covers the 8 x 8 quadrature of each footprint.
+  EXPECT_NEAR(meanRendered, meanExpected, 4 * se + 1e-3 * meanExpected) << algorithmName(algorithm);
 }
 
 TEST(AnalyticIrradiance, PathTracing) {
@@ -230,6 +212,27 @@ TEST(AnalyticIrradiance, Pssmlt) {
 namespace farm {
 namespace {
 
+// One BDPT sample's estimate of the image's mean pixel is its splats' total (channel c) over the
+// pixel count; n samples with uniform film points give the mean and its standard error.
+std::pair<double, double> imageMeanPerSample(const BidirectionalTracer& tracer, const Camera& cam,
+                                             Rng* rng, int n, int c) {
+  IndependentSampler sampler(rng);
+  std::vector<Splat> splats;
+  double sum = 0, sumSq = 0;
+  for (int k = 0; k < n; ++k) {
+    splats.clear();
+    tracer.sample(Vec2f(rng->nextFloat() * cam.width(), rng->nextFloat() * cam.height()), sampler,
+                  &splats);
+    double v = 0;
+    for (const Splat& s : splats) v += s.value[c];
+    v /= cam.pixelCount();
+    sum += v;
+    sumSq += v * v;
+  }
+  double mean = sum / n;
+  return {mean, std::sqrt(std::max(0.0, sumSq / n - mean * mean) / n)};
+}
+
 // Every MIS heuristic makes BDPT unbiased (the weights of a path's strategies sum to one), so
 // each must reproduce the furnace. The maximum heuristic is checked under the spherical light
 // below instead: in a spherical furnace cosine and area sampling tie exactly everywhere, and
@@ -242,62 +245,26 @@ TEST(Furnace, BidirectionalWithBalanceAndPowerHeuristics) {
   for (MisHeuristic h : {MisHeuristic::Balance, MisHeuristic::Power}) {
     BidirectionalTracer tracer(scene, 4, h);
     Rng rng(17, uint64_t(h));
-    IndependentSampler sampler(&rng);
-    std::vector<Splat> splats;
-    const int n = 40000;
-    double sum = 0, sumSq = 0;
-    for (int i = 0; i < n; ++i) {
-      splats.clear();
-      Vec2f film(rng.nextFloat() * 24, rng.nextFloat() * 24);
-      tracer.sample(film, sampler, &splats);
-      // One sample's estimate of the image's mean pixel: its splats' total over the pixels.
-      double v = 0;
-      for (const Splat& s : splats) v += s.value.z;
-      v /= scene.camera().pixelCount();
-      sum += v;
-      sumSq += v * v;
-    }
-    double mean = sum / n;
-    double se = std::sqrt(std::max(0.0, sumSq / n - mean * mean) / n);
+    auto [mean, se] = imageMeanPerSample(tracer, scene.camera(), &rng, 40000, 2);
     EXPECT_NEAR(mean, expected, 4 * se) << "heuristic " << int(h);
   }
 }
 
 // Direct light from the spherical light onto the floor with each heuristic, the maximum
-// heuristic of Veach and Guibas (1994) included: one sample's estimate of the image's mean pixel
-// is the total of its splats over the pixel count, whose expectation is the analytic radiance
+// heuristic of Veach and Guibas (1994) included: the image mean against the analytic radiance
 // averaged over the film.
 TEST(AnalyticIrradiance, BidirectionalWithEveryHeuristic) {
   Scene scene(irradianceScene());
   const Camera& cam = scene.camera();
   double expected = 0;
-  const int g = 256;
-  for (int j = 0; j < g; ++j) {
-    for (int i = 0; i < g; ++i) {
-      Ray ray = cam.generateRay(Vec2f((i + 0.5f) / g * cam.width(), (j + 0.5f) / g * cam.height()));
-      expected += floorRadiance(ray.o + ray.d * (-ray.o.y / ray.d.y));
-    }
+  for (int y = 0; y < cam.height(); ++y) {
+    for (int x = 0; x < cam.width(); ++x) expected += pixelFootprintRadiance(cam, x, y, 16);
   }
-  expected /= double(g) * g;
+  expected /= cam.pixelCount();
   for (MisHeuristic h : {MisHeuristic::Balance, MisHeuristic::Power, MisHeuristic::Maximum}) {
     BidirectionalTracer tracer(scene, 2, h);
     Rng rng(23, uint64_t(h));
-    IndependentSampler sampler(&rng);
-    std::vector<Splat> splats;
-    const int n = 100000;
-    double sum = 0, sumSq = 0;
-    for (int k = 0; k < n; ++k) {
-      splats.clear();
-      tracer.sample(Vec2f(rng.nextFloat() * cam.width(), rng.nextFloat() * cam.height()), sampler,
-                    &splats);
-      double v = 0;
-      for (const Splat& s : splats) v += s.value.y;
-      v /= cam.pixelCount();
-      sum += v;
-      sumSq += v * v;
-    }
-    double mean = sum / n;
-    double se = std::sqrt(std::max(0.0, sumSq / n - mean * mean) / n);
+    auto [mean, se] = imageMeanPerSample(tracer, cam, &rng, 100000, 1);
     EXPECT_NEAR(mean, expected, 4 * se + 1e-4 * expected) << "heuristic " << int(h);
   }
 }
