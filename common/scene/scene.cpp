@@ -25,6 +25,32 @@ float triangleArea(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
   return 0.5f * length(cross(b - a, c - a));
 }
 
+// Geometric and shading normal of triangle `prim` at barycentric weights (w0, w1, w2) of its
+// vertices. The vertex normals, when used (smooth shading), also say where the outside is, so
+// the geometric normal is turned to their side; flipNormals turns both. False for a degenerate
+// triangle. Intersection and light sampling share it: the emitting side must be the same.
+bool triangleNormals(const ShapeDescription& s, uint32_t prim, float w0, float w1, float w2,
+                     Vec3f* ngOut, Vec3f* nsOut) {
+  const uint32_t* tri = &s.indices[3 * size_t(prim)];
+  const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
+  Vec3f ng = cross(b - a, c - a);
+  float len = length(ng);
+  if (!(len > 0)) return false;
+  ng = ng / len;
+  Vec3f ns = ng;
+  if (!s.faceNormals && !s.normals.empty()) {
+    Vec3f n = s.normals[tri[0]] * w0 + s.normals[tri[1]] * w1 + s.normals[tri[2]] * w2;
+    float nl = length(n);
+    if (nl > 0 && std::isfinite(nl)) {
+      ns = n / nl;
+      if (dot(ns, ng) < 0) ng = -ng;
+    }
+  }
+  *ngOut = s.flipNormals ? -ng : ng;
+  *nsOut = s.flipNormals ? -ns : ns;
+  return true;
+}
+
 }  // namespace
 
 Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
@@ -159,22 +185,7 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
     const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
     float u = rh.hit.u, v = rh.hit.v;
     hit->p = a * (1 - u - v) + b * u + c * v;  // barycentric: more accurate than o + t d
-    Vec3f ng = cross(b - a, c - a);
-    float len = length(ng);
-    if (!(len > 0)) return false;  // degenerate triangle
-    ng = ng / len;
-    Vec3f ns = ng;
-    if (!s.faceNormals && !s.normals.empty()) {
-      // Smooth shading; the vertex normals also say where the outside is.
-      Vec3f n = s.normals[tri[0]] * (1 - u - v) + s.normals[tri[1]] * u + s.normals[tri[2]] * v;
-      float nl = length(n);
-      if (nl > 0 && std::isfinite(nl)) {
-        ns = n / nl;
-        if (dot(ns, ng) < 0) ng = -ng;
-      }
-    }
-    hit->ng = s.flipNormals ? -ng : ng;
-    hit->ns = s.flipNormals ? -ns : ns;
+    if (!triangleNormals(s, rh.hit.primID, 1 - u - v, u, v, &hit->ng, &hit->ns)) return false;
   }
   return true;
 }
@@ -231,13 +242,8 @@ void Scene::sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) co
   const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
   Vec2f bary = squareToTriangle({u[1], u[2]});
   *p = a * bary.x + b * bary.y + c * (1 - bary.x - bary.y);
-  Vec3f ng = normalize(cross(b - a, c - a));
-  if (!s.faceNormals && !s.normals.empty()) {
-    Vec3f ns = s.normals[tri[0]] * bary.x + s.normals[tri[1]] * bary.y +
-               s.normals[tri[2]] * (1 - bary.x - bary.y);
-    if (dot(ns, ng) < 0) ng = -ng;
-  }
-  *n = s.flipNormals ? -ng : ng;
+  Vec3f ns;
+  triangleNormals(s, uint32_t(t), bary.x, bary.y, 1 - bary.x - bary.y, n, &ns);
 }
 
 }  // namespace farm

@@ -27,8 +27,7 @@ Vec3f directionTo(const Vec3f& from, const Vec3f& to) {
 // shading cosine times the adjoint correction, |w.ng| |wo.ns| / |wo.ng|.
 float lightEndCosine(const PathVertex& y, const Vec3f& w, int s) {
   if (s == 1) return absDot(y.n, w);
-  float den = absDot(y.wo, y.n);
-  return den > 0 ? absDot(w, y.n) * absDot(y.wo, y.ns) / den : 0.0f;
+  return absDot(w, y.ns) * shadingCorrection(y.wo, w, y.n, y.ns);
 }
 
 }  // namespace
