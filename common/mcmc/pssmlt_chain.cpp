@@ -38,18 +38,31 @@ double tracePath(const BidirectionalTracer& tracer, const Camera& camera, Sample
   return sum;
 }
 
+PrimarySampleSampler chainSampler(const ChainSpec& spec) {
+  return PrimarySampleSampler(spec.seed, streamId(kChainDomain, spec.chainIndex),
+                              spec.largeStepProbability);
+}
+
+// Rebuilds the path of the sampler's current vector without mutating it; returns its I.
+double rebuildCurrentPath(const BidirectionalTracer& tracer, const Camera& camera,
+                          PrimarySampleSampler& sampler, std::vector<Splat>* splats,
+                          int64_t* rejected) {
+  sampler.setFrozen(true);
+  sampler.startPath();
+  double I = tracePath(tracer, camera, sampler, splats, rejected);
+  sampler.setFrozen(false);
+  return I;
+}
+
 }  // namespace
 
 double seedContributionOf(const Scene& scene, const ChainSpec& spec) {
   BidirectionalTracer tracer(scene, spec.maxDepth);
-  PrimarySampleSampler sampler(spec.seed, streamId(kChainDomain, spec.chainIndex),
-                               spec.largeStepProbability);
+  PrimarySampleSampler sampler = chainSampler(spec);
   sampler.setSeed(spec.seedSample);
-  sampler.setFrozen(true);
-  sampler.startPath();
   std::vector<Splat> splats;
   int64_t rejected = 0;
-  return tracePath(tracer, scene.camera(), sampler, &splats, &rejected);
+  return rebuildCurrentPath(tracer, scene.camera(), sampler, &splats, &rejected);
 }
 
 void runPssmltChain(const Scene& scene, const ChainSpec& spec,
@@ -57,8 +70,7 @@ void runPssmltChain(const Scene& scene, const ChainSpec& spec,
                     const std::atomic<bool>* cancel) {
   const Camera& camera = scene.camera();
   BidirectionalTracer tracer(scene, spec.maxDepth);
-  PrimarySampleSampler sampler(spec.seed, streamId(kChainDomain, spec.chainIndex),
-                               spec.largeStepProbability);
+  PrimarySampleSampler sampler = chainSampler(spec);
   if (!spec.resumeState.empty()) {
     if (!sampler.deserialize(spec.resumeState)) {
       throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
@@ -73,11 +85,7 @@ void runPssmltChain(const Scene& scene, const ChainSpec& spec,
 
   int64_t rejected = 0;
   std::vector<Splat> current, proposed;
-  // Rebuild the current state's path from its vector without mutating it.
-  sampler.setFrozen(true);
-  sampler.startPath();
-  double currentI = tracePath(tracer, camera, sampler, &current, &rejected);
-  sampler.setFrozen(false);
+  double currentI = rebuildCurrentPath(tracer, camera, sampler, &current, &rejected);
   if (!(currentI > 0)) {
     throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
                              ": the seed path carries no light on this host");
