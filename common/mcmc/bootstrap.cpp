@@ -68,26 +68,28 @@ BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_
 
 std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n, uint64_t seed) {
   std::vector<int64_t> picks;
+  // Running sums: candidate i owns [cumulative[i-1], cumulative[i]), empty when it carries no
+  // light, so a target that lands in a candidate's interval never picks a zero weight.
+  std::vector<double> cumulative(contributions.size());
   double total = 0;
-  for (double c : contributions) total += c;
+  size_t lastWithWeight = 0;
+  for (size_t i = 0; i < contributions.size(); ++i) {
+    if (contributions[i] > 0) {
+      total += contributions[i];
+      lastWithWeight = i;
+    }
+    cumulative[i] = total;
+  }
   if (!(total > 0) || n <= 0) return picks;
   Rng rng(seed, streamId(kResampleDomain, 0));
-  const double step = total / n;
-  double target = rng.nextDouble() * step;
-  double running = 0;
-  size_t i = 0;
+  const double offset = rng.nextDouble();
   for (int k = 0; k < n; ++k) {
-    while (i + 1 < contributions.size() && running + contributions[i] <= target) {
-      running += contributions[i];
-      ++i;
-    }
-    // never pick a zero-contribution candidate
-    while (contributions[i] <= 0 && i + 1 < contributions.size()) {
-      running += contributions[i];
-      ++i;
-    }
+    // Each target from its own product (not a running sum of steps), and rounding that carries
+    // it to the total or beyond lands on the last candidate with weight.
+    const double target = (double(k) + offset) / double(n) * total;
+    auto it = std::upper_bound(cumulative.begin(), cumulative.end(), target);
+    size_t i = it == cumulative.end() ? lastWithWeight : size_t(it - cumulative.begin());
     picks.push_back(int64_t(i));
-    target += step;
   }
   return picks;
 }

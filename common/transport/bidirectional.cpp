@@ -12,11 +12,7 @@ namespace {
 
 // Converts a solid-angle density at `from` towards `to` into an area density at `to`.
 float toAreaDensity(float pdfSolidAngle, const Vec3f& from, const PathVertex& to) {
-  Vec3f d = to.p - from;
-  float d2 = lengthSquared(d);
-  if (!(d2 > 0)) return 0;
-  float cosTo = lengthSquared(to.n) > 0 ? absDot(to.n, d) / std::sqrt(d2) : 1.0f;
-  return pdfSolidAngle * cosTo / d2;
+  return float(toAreaDensity(double(pdfSolidAngle), from, to.p, to.n));
 }
 
 Vec3f directionTo(const Vec3f& from, const Vec3f& to) {
@@ -208,13 +204,25 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
   const int n = s + t;
   thread_local std::vector<double> pLStore, pEStore;
   thread_local std::vector<char> deltaStore;
-  if (int(pLStore.size()) < n) pLStore.resize(n), pEStore.resize(n), deltaStore.resize(n);
+  thread_local std::vector<const PathVertex*> vertexStore;
+  if (int(pLStore.size()) < n) {
+    pLStore.resize(n), pEStore.resize(n), deltaStore.resize(n), vertexStore.resize(n);
+  }
   double* pL = pLStore.data();
   double* pE = pEStore.data();
   char* delta = deltaStore.data();
   auto at = [&](int i) -> const PathVertex& {
     return i < s ? lightPath[i] : cameraPath[n - 1 - i];
   };
+  if (heuristic_ == MisHeuristic::Maximum) {
+    // The whole path goes to one strategy. Which one must not depend on who asks: densities
+    // kept from sampling and densities recomputed at a connection differ by rounding, and where
+    // strategies tie (everywhere in a spherical furnace) that rounding would give a path two
+    // winners or none. So every strategy recomputes all densities from the vertices alone.
+    for (int i = 0; i < n; ++i) vertexStore[i] = &at(i);
+    pathDensities(scene_, vertexStore.data(), n, pL, pE, delta);
+    return maximumHeuristicStrategy(pL, pE, delta, n) == s ? 1.0 : 0.0;
+  }
   for (int i = 0; i < n; ++i) {
     const PathVertex& v = at(i);
     if (i < s)
@@ -271,30 +279,22 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     }
   }
   auto remap = [](double p) { return p != 0 ? p : 1.0; };
-  // The maximum heuristic (Veach and Guibas 1994) gives the whole path to the strategy of
-  // largest density. Ties are common (in a spherical furnace cosine sampling and area sampling
-  // have equal densities everywhere) and rounding (measured up to 3e-4 there) decides them
-  // differently from each side, so densities within kTie of each other go to the strategy with
-  // fewer light vertices: each path has exactly one winner, whichever strategy evaluates it.
-  constexpr double kTie = 1e-2;
-  const bool maximum = heuristic_ == MisHeuristic::Maximum;
   double sum = 1;
   double r = 1;
+  const bool power = heuristic_ == MisHeuristic::Power;
   for (int i = s; i <= n - 2; ++i) {  // strategies with more light vertices (j = i + 1)
     r *= remap(pL[i]) / remap(pE[i]);
     if (delta[i] || delta[i + 1]) continue;
-    if (maximum && r > 1 + kTie) return 0;
-    sum += heuristic_ == MisHeuristic::Power ? r * r : r;
+    sum += power ? r * r : r;
   }
   r = 1;
   for (int i = s - 1; i >= 0; --i) {  // strategies with fewer light vertices (j = i)
     r *= remap(pE[i]) / remap(pL[i]);
     bool connectible = !delta[i] && (i == 0 || !delta[i - 1]);
     if (!connectible) continue;
-    if (maximum && r > 1 - kTie) return 0;
-    sum += heuristic_ == MisHeuristic::Power ? r * r : r;
+    sum += power ? r * r : r;
   }
-  return maximum ? 1.0 : 1 / sum;
+  return 1 / sum;
 }
 
 void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,

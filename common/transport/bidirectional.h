@@ -8,24 +8,10 @@
 
 #include "common/film/splat_buffer.h"
 #include "common/scene/scene.h"
+#include "common/transport/path_vertex.h"
 #include "common/transport/sampler.h"
 
 namespace farm {
-
-struct PathVertex {
-  enum class Kind : uint8_t { Camera, Light, Surface };
-  Kind kind = Kind::Surface;
-  Vec3f p;
-  Vec3f n;   // geometric normal; zero for the (pinhole) camera
-  Vec3f ns;  // shading normal (the BSDF's frame); n for lights, zero for the camera
-  Vec3f wo;  // unit direction to the previous vertex of its own subpath
-  int shape = -1;
-  int light = -1;      // the area light this vertex lies on, or -1
-  Spectrum beta;       // subpath throughput up to here, divided by the sampling densities
-  float pdfFwd = 0;    // area density of this vertex, sampled from its own subpath's side
-  float pdfRev = 0;    // area density of this vertex, sampled from the other side
-  bool delta = false;  // scattered by a Dirac lobe here
-};
 
 enum class MisHeuristic { Balance, Power, Maximum };
 

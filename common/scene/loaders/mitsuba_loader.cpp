@@ -726,6 +726,13 @@ class MitsubaLoader {
       } else {
         failUnknownElement(inner);
       }
+      if (b.type == BsdfDescription::Type::Dielectric) {
+        // A dielectric's two sides differ by nature (the relative index flips): mirroring the
+        // back onto the front would swap reflection and transmission with the wrong index.
+        fail(node,
+             "twosided cannot wrap a dielectric: a dielectric already has two sides "
+             "(Mitsuba refuses this too)");
+      }
       b.twoSided = true;
       b.id = node.attribute("id").as_string();
       rejectUnused(props, what);

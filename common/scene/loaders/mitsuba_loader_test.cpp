@@ -426,7 +426,7 @@ TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   <string name="distribution" value="ggx"/>
   <float name="alphaU" value="0.00001"/><float name="alphaV" value="0.00001"/>
 </bsdf>
-<bsdf type="twosided" id="t"><ref id="w"/></bsdf>
+<bsdf type="twosided" id="t"><ref id="c"/></bsdf>
 <bsdf type="diffuse" id="d"><spectrum name="reflectance" value="0.25"/></bsdf>
 <bsdf type="diffuse" id="e"><float name="reflectance" value="0.75"/></bsdf>
 <bsdf type="diffuse" id="f"><rgb name="reflectance" value="0.1 0.2 0.3"/></bsdf>
@@ -446,7 +446,7 @@ TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   EXPECT_FLOAT_EQ(s.bsdfs[1].alpha, 1e-4f);                         // clamped up
   expectNear(s.bsdfs[1].eta, {0.200438f, 0.924033f, 1.10221f}, 0);  // copper by default
   EXPECT_TRUE(s.bsdfs[2].twoSided);
-  EXPECT_EQ(s.bsdfs[2].type, BsdfDescription::Type::Dielectric);
+  EXPECT_EQ(s.bsdfs[2].type, BsdfDescription::Type::RoughConductor);
   EXPECT_EQ(s.bsdfs[2].id, "t");
   expectNear(s.bsdfs[3].reflectance, Vec3f(0.25f), 0);
   expectNear(s.bsdfs[4].reflectance, Vec3f(0.75f), 0);
@@ -547,6 +547,22 @@ TEST(MitsubaLoaderErrorTest, UnknownTypesNameTypeAndLine) {
       sceneXml("<bsdf type=\"diffuse\">\n<float name=\"roughness\" value=\"0.1\"/></bsdf>\n")));
   EXPECT_NE(msg.find("i.xml:4:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("roughness"), std::string::npos) << msg;
+}
+
+// A dielectric has two sides by nature (inside and outside differ by the relative index);
+// twosided would mirror the back side onto the front and swap reflection and transmission with
+// the wrong index. Mitsuba refuses the combination; so do we, with or without a <ref>.
+TEST(MitsubaLoaderErrorTest, TwosidedDielectricIsRefused) {
+  TempDir dir;
+  std::string msg = loadError(dir.write(
+      "a.xml", sceneXml("<bsdf type=\"twosided\">\n<bsdf type=\"dielectric\"/></bsdf>\n")));
+  EXPECT_NE(msg.find("a.xml:3:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("dielectric"), std::string::npos) << msg;
+  msg = loadError(
+      dir.write("b.xml", sceneXml("<bsdf type=\"dielectric\" id=\"glass\"/>\n"
+                                  "<bsdf type=\"twosided\">\n<ref id=\"glass\"/></bsdf>\n")));
+  EXPECT_NE(msg.find("b.xml:4:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("dielectric"), std::string::npos) << msg;
 }
 
 TEST(MitsubaLoaderErrorTest, NonFiniteAndNonNumericParameters) {

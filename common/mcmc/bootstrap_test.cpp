@@ -1,0 +1,69 @@
+// Seed resampling: every pick carries light, and picks follow the weights (systematic
+// resampling gives each candidate floor or ceil of n w_i / W picks).
+#include "common/mcmc/bootstrap.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "common/sampling/rng.h"
+
+namespace farm {
+namespace {
+
+// Rounding in the running sums can carry the last targets past the last candidate with weight;
+// trailing zero-weight candidates must still never be picked (a chain seeded there has nothing
+// to start from).
+TEST(ResampleSeeds, NeverPicksACandidateWithoutWeight) {
+  // Weights of a few subnormal units: the step W / n rounds to a whole unit, so the running
+  // targets overshoot the total by up to half a step.
+  const double unit = std::numeric_limits<double>::denorm_min();
+  for (uint64_t seed = 0; seed < 64; ++seed) {
+    for (int n = 2; n <= 5; ++n) {
+      const std::vector<double> tiny = {unit, 2 * unit, 0.0, 0.0};
+      for (int64_t p : resampleSeeds(tiny, n, seed))
+        ASSERT_GT(tiny[size_t(p)], 0) << "seed " << seed << ", n " << n << " picked " << p;
+    }
+  }
+  Rng rng(7, 7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int count = 1 + int(rng.nextUint() % 64);
+    std::vector<double> w(size_t(count) + 1 + rng.nextUint() % 8, 0.0);
+    for (int i = 0; i < count; ++i) {
+      // weights spanning many magnitudes, some zero, so that the sums round
+      w[size_t(i)] =
+          rng.nextFloat() < 0.2f ? 0.0 : std::ldexp(rng.nextDouble(), -int(rng.nextUint() % 40));
+    }
+    w[size_t(count) - 1] = 0.1 + 0.3 * rng.nextDouble();  // at least one carries light
+    const int n = 1 + int(rng.nextUint() % 300);
+    std::vector<int64_t> picks = resampleSeeds(w, n, uint64_t(trial));
+    ASSERT_EQ(picks.size(), size_t(n));
+    for (int64_t p : picks) {
+      ASSERT_GE(p, 0);
+      ASSERT_LT(p, int64_t(w.size()));
+      ASSERT_GT(w[size_t(p)], 0) << "trial " << trial << " picked " << p << " of " << w.size();
+    }
+  }
+}
+
+TEST(ResampleSeeds, PicksFollowTheWeights) {
+  const std::vector<double> w = {0.0, 3.0, 1.0, 0.0, 4.0, 0.0};
+  const int n = 800;
+  for (uint64_t seed = 0; seed < 20; ++seed) {
+    std::vector<int64_t> picks = resampleSeeds(w, n, seed);
+    std::vector<int> counts(w.size(), 0);
+    for (int64_t p : picks) ++counts[size_t(p)];
+    for (size_t i = 0; i < w.size(); ++i) {
+      double expected = n * w[i] / 8.0;
+      EXPECT_GE(counts[i], std::floor(expected)) << i;
+      EXPECT_LE(counts[i], std::ceil(expected)) << i;
+    }
+  }
+  EXPECT_TRUE(resampleSeeds({0.0, 0.0}, 4, 1).empty());
+  EXPECT_TRUE(resampleSeeds({}, 4, 1).empty());
+}
+
+}  // namespace
+}  // namespace farm

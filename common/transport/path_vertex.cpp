@@ -1,0 +1,101 @@
+#include "common/transport/path_vertex.h"
+
+#include <cmath>
+
+#include "common/sampling/warp.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+
+double toAreaDensity(double pdfSolidAngle, const Vec3f& from, const Vec3f& to, const Vec3f& toN) {
+  Vec3f d = to - from;
+  double d2 = double(lengthSquared(d));
+  if (!(d2 > 0)) return 0;
+  double cosTo = lengthSquared(toN) > 0 ? double(absDot(toN, d)) / std::sqrt(d2) : 1.0;
+  return pdfSolidAngle * cosTo / d2;
+}
+
+namespace {
+
+// Solid-angle density of leaving surface vertex v towards `to`, having arrived from `from`.
+double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& from, const Vec3f& to) {
+  Frame frame(v.ns);
+  Vec3f wo = frame.toLocal(normalize(from - v.p));
+  Vec3f wi = frame.toLocal(normalize(to - v.p));
+  return scene.bsdfOf(v.shape).pdf(wo, wi);
+}
+
+}  // namespace
+
+void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double* pL, double* pE,
+                   char* delta) {
+  for (int i = 0; i < n; ++i) {
+    const PathVertex& v = *x[i];
+    delta[i] = v.kind == PathVertex::Kind::Surface && scene.bsdfOf(v.shape).isDelta();
+    pL[i] = pE[i] = 0;
+  }
+  if (n < 2) return;
+  // From the light side: x_0 by light selection and uniform area sampling, x_1 by cosine
+  // emission, the rest by BSDF sampling at their predecessor.
+  const PathVertex& x0 = *x[0];
+  if (x0.light >= 0) {
+    pL[0] = double(scene.lightPickPdf(x0.light)) / double(scene.lights()[x0.light].area);
+    Vec3f w = normalize(x[1]->p - x0.p);
+    pL[1] = toAreaDensity(cosineHemispherePdf(dot(x0.n, w)), x0.p, x[1]->p, x[1]->n);
+  }
+  for (int i = 2; i < n - 1; ++i) {
+    const PathVertex& prev = *x[i - 1];
+    if (delta[i - 1]) continue;
+    pL[i] = toAreaDensity(scatterPdf(scene, prev, x[i - 2]->p, x[i]->p), prev.p, x[i]->p, x[i]->n);
+  }
+  // From the camera side: x_{n-2} through the camera's importance (a direction density), the
+  // rest by BSDF sampling at their successor. The pinhole itself has no density (pE = 0).
+  const PathVertex& camera = *x[n - 1];
+  Vec3f toFirst = normalize(x[n - 2]->p - camera.p);
+  pE[n - 2] = toAreaDensity(scene.camera().importance(toFirst), camera.p, x[n - 2]->p, x[n - 2]->n);
+  for (int i = n - 3; i >= 0; --i) {
+    const PathVertex& next = *x[i + 1];
+    if (delta[i + 1]) continue;
+    pE[i] = toAreaDensity(scatterPdf(scene, next, x[i + 2]->p, x[i]->p), next.p, x[i]->p, x[i]->n);
+  }
+}
+
+int maximumHeuristicStrategy(const double* pL, const double* pE, const char* delta, int n) {
+  // Strategy s has density prod_{i<s} pL[i] prod_{i>=s} pE[i]. A vertex sampled through a
+  // Dirac lobe counts as one on either side (Veach 1997, 10.3.5), the pinhole as well; a zero
+  // density elsewhere means the strategy cannot build the path. Strategies that would connect
+  // through a Dirac vertex cannot build it either.
+  //
+  // Strategies often tie exactly (in a spherical furnace all of them do, everywhere), and each
+  // strategy sees the path through its own vertices, equal up to rounding. So densities are
+  // compared on a grid of 1% in the logarithm, ties going to fewer light vertices: rounding
+  // decides only for paths within rounding of a grid line, and the comparison stays a total
+  // order (a band around each pairwise comparison would not be transitive: 1, 1.008, 1.016).
+  constexpr double kGrid = 0.01;
+  auto sampledFromLight = [&](int i) { return i > 0 && delta[i - 1]; };
+  auto sampledFromCamera = [&](int i) { return i == n - 1 || (i + 1 < n && delta[i + 1]); };
+  int best = -1;
+  long long bestLevel = 0;
+  for (int s = 0; s <= n - 1; ++s) {  // t = n - s >= 1 camera vertices
+    bool possible = s == 0 ? pL[0] > 0 : !delta[s - 1] && !delta[s];
+    double logDensity = 0;
+    for (int i = 0; i < n && possible; ++i) {
+      const bool fromLight = i < s;
+      if (fromLight ? sampledFromLight(i) : sampledFromCamera(i)) continue;
+      const double p = fromLight ? pL[i] : pE[i];
+      if (!(p > 0) || !std::isfinite(p))
+        possible = false;
+      else
+        logDensity += std::log(p);
+    }
+    if (!possible) continue;
+    const long long level = std::llround(logDensity / kGrid);
+    if (best < 0 || level > bestLevel) {
+      best = s;
+      bestLevel = level;
+    }
+  }
+  return best;
+}
+
+}  // namespace farm

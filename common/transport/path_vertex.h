@@ -1,0 +1,46 @@
+#pragma once
+// A vertex of a light path, as the bidirectional tracer builds it and the path-space
+// mutations edit it, and the densities every sampling strategy gives a whole path.
+#include <cstdint>
+
+#include "common/math/vec.h"
+
+namespace farm {
+
+class Scene;
+
+struct PathVertex {
+  enum class Kind : uint8_t { Camera, Light, Surface };
+  Kind kind = Kind::Surface;
+  Vec3f p;
+  Vec3f n;   // geometric normal; zero for the (pinhole) camera
+  Vec3f ns;  // shading normal (the BSDF's frame); n for lights, zero for the camera
+  Vec3f wo;  // unit direction to the previous vertex of its own subpath
+  int shape = -1;
+  int light = -1;      // the area light this vertex lies on, or -1
+  Spectrum beta;       // subpath throughput up to here, divided by the sampling densities
+  float pdfFwd = 0;    // area density of this vertex, sampled from its own subpath's side
+  float pdfRev = 0;    // area density of this vertex, sampled from the other side
+  bool delta = false;  // scattered by a Dirac lobe here
+};
+
+// Converts a solid-angle density at `from` towards `to` into an area density at `to` (the
+// geometric normal's cosine over the squared distance; 1 / d^2 at the normal-less camera).
+double toAreaDensity(double pdfSolidAngle, const Vec3f& from, const Vec3f& to, const Vec3f& toN);
+
+// The densities of every vertex of a whole path x_0 .. x_{n-1} (x_0 on a light, x_{n-1} the
+// camera) computed from the vertices alone, in one fixed order of operations: pL[i] is the area
+// density of x_i sampled from the light side (x_0 by light selection and area sampling, x_1 by
+// emission, then by the BSDFs), pE[i] from the camera side. Zero where a Dirac lobe samples the
+// vertex, or where nothing can (the camera from the light side). Strategy (s, t = n - s) has
+// density prod_{i<s} pL[i] prod_{i>=s} pE[i] (Veach 1997, eq. 10.8). `path[i]` points at x_i;
+// `delta[i]` receives whether x_i scatters only through Dirac lobes.
+void pathDensities(const Scene& scene, const PathVertex* const* path, int n, double* pL, double* pE,
+                   char* delta);
+
+// The strategy s (light vertices) of largest density among those that can build the path, ties
+// to the fewer light vertices: the maximum heuristic's winner (Veach and Guibas 1994). One
+// function of the densities above, so that every strategy that evaluates the path agrees on it.
+int maximumHeuristicStrategy(const double* pL, const double* pE, const char* delta, int n);
+
+}  // namespace farm
