@@ -8,7 +8,7 @@ LocalChainSource::LocalChainSource(Coordinator* coordinator, int threads)
   info.version = "embedded";
   info.host = "localhost";
   info.threads = threads;
-  info.capabilities = {Algorithm::PathTracing, Algorithm::Bidirectional, Algorithm::PSSMLT};
+  for (Algorithm a : allAlgorithms()) info.capabilities.insert(a);
   Status s = coordinator_->registerWorker(info, &workerId_);
   if (!s.isOk()) throw SourceRefused(s.message());
 }

@@ -44,13 +44,24 @@ struct RenderOptions {
   int width = 0, height = 0;
   std::string seed = "1";  // parsed by hand: CLI11 would wrap "-1" around to 2^64 - 1
   std::string reference;
+  float largeStep = farm::RenderSettings().largeStepProbability;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
 void addRenderOptions(CLI::App* command, RenderOptions* o) {
-  command->add_option("--algorithm", o->algorithm, "pt, bdpt or pssmlt")->default_str("pssmlt");
+  command
+      ->add_option("--algorithm", o->algorithm,
+                   "pt (path tracing), bdpt (bidirectional), pssmlt (primary-sample MLT over "
+                   "bdpt), pssmlt-pt (the same over pt), mmlt (multiplexed MLT)")
+      ->default_str("pssmlt");
   command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt)")->default_str("16");
-  command->add_option("--mpp", o->mpp, "mutations per pixel (pssmlt)")->default_str("16");
+  command->add_option("--mpp", o->mpp, "mutations per pixel (pssmlt, pssmlt-pt, mmlt)")
+      ->default_str("16");
+  command
+      ->add_option("--large-step", o->largeStep,
+                   "probability of a large step, a fresh independent sample (pssmlt, pssmlt-pt, "
+                   "mmlt; Kelemen et al. 2002)")
+      ->default_str(std::to_string(o->largeStep).substr(0, 3));
   o->timeOption = command->add_option(
       "--time", o->time,
       "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
@@ -71,7 +82,8 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
 // Checks the option values with the user's names for them; false with *error otherwise.
 bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* error) {
   if (!farm::parseAlgorithm(o.algorithm, &s->algorithm)) {
-    *error = "--algorithm must be pt, bdpt or pssmlt, not '" + o.algorithm + "'";
+    *error =
+        std::string("--algorithm must be ") + farm::algorithmList() + ", not '" + o.algorithm + "'";
     return false;
   }
   constexpr int64_t kMaxPerPixel = int64_t(1) << 24;
@@ -97,6 +109,11 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
       return false;
     }
   }
+  if (!(o.largeStep > 0 && o.largeStep <= 1)) {
+    *error = "--large-step must be a probability in (0, 1], not " + std::to_string(o.largeStep);
+    return false;
+  }
+  s->largeStepProbability = o.largeStep;
   s->samplesPerPixel = o.spp;
   s->mutationsPerPixel = o.mpp;
   s->timeBudgetSeconds = o.timeOption->count() ? o.time : 0;

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "common/render/chain_spec.h"
+#include "common/chain/chain_spec.h"
 
 namespace farm {
 

@@ -2,34 +2,35 @@
 
 namespace farm {
 
+namespace {
+struct AlgorithmPair {
+  Algorithm algorithm;
+  v1::Algorithm wire;
+};
+constexpr AlgorithmPair kAlgorithms[] = {
+    {Algorithm::PathTracing, v1::PT}, {Algorithm::Bidirectional, v1::BDPT},
+    {Algorithm::PSSMLT, v1::PSSMLT},  {Algorithm::PSSMLTOverPT, v1::PSSMLT_PT},
+    {Algorithm::MMLT, v1::MMLT},
+};
+}  // namespace
+
 v1::Algorithm toProto(Algorithm algorithm) {
-  switch (algorithm) {
-    case Algorithm::PathTracing:
-      return v1::PT;
-    case Algorithm::Bidirectional:
-      return v1::BDPT;
-    case Algorithm::PSSMLT:
-      return v1::PSSMLT;
+  for (const AlgorithmPair& p : kAlgorithms) {
+    if (p.algorithm == algorithm) return p.wire;
   }
   return v1::ALGORITHM_UNSPECIFIED;
 }
 
 bool fromProto(v1::Algorithm algorithm, Algorithm* out, std::string* error) {
-  switch (algorithm) {
-    case v1::PT:
-      *out = Algorithm::PathTracing;
+  for (const AlgorithmPair& p : kAlgorithms) {
+    if (p.wire == algorithm) {
+      *out = p.algorithm;
       return true;
-    case v1::BDPT:
-      *out = Algorithm::Bidirectional;
-      return true;
-    case v1::PSSMLT:
-      *out = Algorithm::PSSMLT;
-      return true;
-    default:
-      *error = "algorithm is unspecified or unknown (value " + std::to_string(int(algorithm)) +
-               "); expected pt, bdpt or pssmlt";
-      return false;
+    }
   }
+  *error = "algorithm is unspecified or unknown (value " + std::to_string(int(algorithm)) +
+           "); expected " + algorithmList();
+  return false;
 }
 
 v1::RenderSettings toProto(const RenderSettings& settings) {

@@ -3,7 +3,7 @@
 // renderer (common/) knows nothing of protobuf; this is the only place the two meet.
 #include <string>
 
-#include "common/render/chain_spec.h"
+#include "common/chain/chain_spec.h"
 #include "common/render/render_settings.h"
 #include "proto/farm.pb.h"
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -195,8 +196,14 @@ TEST(ClusterFailure, KilledWorkerChangesNothingButTime) {
 INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterTest,
                          ::testing::Values(ClusterCase{"pt", {"--spp", "64"}},
                                            ClusterCase{"bdpt", {"--spp", "16"}},
-                                           ClusterCase{"pssmlt", {"--mpp", "32"}}),
-                         [](const auto& info) { return info.param.algorithm; });
+                                           ClusterCase{"pssmlt", {"--mpp", "32"}},
+                                           ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
+                                           ClusterCase{"mmlt", {"--mpp", "32"}}),
+                         [](const auto& info) {
+                           std::string name = info.param.algorithm;
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
 
 }  // namespace
 }  // namespace farm::testing

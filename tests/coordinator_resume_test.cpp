@@ -4,6 +4,7 @@
 // and failures do not change the image).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <thread>
@@ -74,7 +75,7 @@ int runLease(Coordinator& coordinator, const std::string& worker, const WorkerLe
 std::string registerWorker(Coordinator& coordinator) {
   WorkerInfo info;
   info.threads = 1;
-  info.capabilities = {Algorithm::PathTracing, Algorithm::Bidirectional, Algorithm::PSSMLT};
+  for (Algorithm a : allAlgorithms()) info.capabilities.insert(a);
   std::string id;
   EXPECT_TRUE(coordinator.registerWorker(info, &id).isOk());
   return id;
@@ -158,8 +159,13 @@ TEST_P(ResumeTest, ReleasedChainResumesAndTheImageIsUnchanged) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Algorithms, ResumeTest,
-                         ::testing::Values(Algorithm::PathTracing, Algorithm::PSSMLT),
-                         [](const auto& info) { return std::string(algorithmName(info.param)); });
+                         ::testing::Values(Algorithm::PathTracing, Algorithm::PSSMLT,
+                                           Algorithm::PSSMLTOverPT, Algorithm::MMLT),
+                         [](const auto& info) {
+                           std::string name = algorithmName(info.param);
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
 
 TEST(CoordinatorCore, FailedSceneKeepsItsMessage) {
   testing::ScratchDir scratch("failed-scene");

@@ -74,7 +74,7 @@ struct RemoteChainSource::Impl {
     request.set_worker_version(options.version);
     request.set_threads(options.threads);
     request.set_host(hostName());
-    for (const char* algorithm : {"pt", "bdpt", "pssmlt"}) request.add_capabilities(algorithm);
+    for (Algorithm a : allAlgorithms()) request.add_capabilities(algorithmName(a));
     v1::RegisterWorkerResponse response;
     grpc::ClientContext context;
     setDeadline(&context, kUnaryDeadline);

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/mcmc/primary_sample_integrand.h"
 #include "common/mcmc/primary_sample_sampler.h"
-#include "common/transport/bidirectional.h"
 
 namespace farm {
 
@@ -16,27 +16,21 @@ constexpr uint64_t kCandidateDomain = 0xb007;
 constexpr uint64_t kResampleDomain = 0x5eed;
 }  // namespace
 
-double evaluateCandidate(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
-                         std::vector<float>* primarySamples) {
+double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
+                         int64_t index, std::vector<float>* primarySamples) {
   thread_local std::vector<Splat> splats;
-  splats.clear();
   Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
   RecordingSampler recorder(&rng);
-  BidirectionalTracer tracer(scene, maxDepth);
-  const Camera& camera = scene.camera();
-  Vec2f film(recorder.next(kCameraStream) * camera.width(),
-             recorder.next(kCameraStream) * camera.height());
-  tracer.sample(film, recorder, &splats);
-  double sum = 0;
-  for (const Splat& s : splats) {
-    if (isValidRadiance(s.value)) sum += luminance(s.value);
-  }
+  auto integrand = makePrimarySampleIntegrand(algorithm, scene, maxDepth);
+  int64_t rejected = 0;
+  double sum = evaluateContribution(*integrand, recorder, &splats, &rejected);
   if (primarySamples) *primarySamples = recorder.values();
   return sum;
 }
 
-BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_t seed,
-                                       int64_t count, const std::function<bool(double)>& progress) {
+BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, int maxDepth,
+                                       uint64_t seed, int64_t count,
+                                       const std::function<bool(double)>& progress) {
   BootstrapCandidates out;
   out.contributions.assign(size_t(count), 0.0);
   // Rounds of parallel work with a progress report (and a chance to cancel) between them; the
@@ -47,7 +41,7 @@ BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_
     tbb::parallel_for(
         tbb::blocked_range<int64_t>(begin, end, 256), [&](const tbb::blocked_range<int64_t>& r) {
           for (int64_t i = r.begin(); i < r.end(); ++i) {
-            out.contributions[size_t(i)] = evaluateCandidate(scene, maxDepth, seed, i);
+            out.contributions[size_t(i)] = evaluateCandidate(scene, algorithm, maxDepth, seed, i);
           }
         });
     if (progress && !progress(double(end) / double(count))) return BootstrapCandidates();

@@ -7,6 +7,7 @@
 #include <functional>
 #include <vector>
 
+#include "common/chain/algorithm.h"
 #include "common/scene/scene.h"
 
 namespace farm {
@@ -17,16 +18,16 @@ struct BootstrapCandidates {
   int64_t nonZero = 0;
 };
 
-// I(u) for the candidate with index i of a job with `seed`: the BDPT sample drawn from stream
-// (seed, i), its film point uniform over the image. Returns the splats' total luminance and,
-// when asked, the primary-sample vector it used.
-double evaluateCandidate(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
-                         std::vector<float>* primarySamples = nullptr);
+// I(u) for the candidate with index i of a job with `seed`: the algorithm's primary-sample
+// integrand (see primary_sample_integrand.h) evaluated on stream (seed, i). Returns the splats'
+// total luminance and, when asked, the primary-sample vector it used.
+double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
+                         int64_t index, std::vector<float>* primarySamples = nullptr);
 
 // Generates `count` candidates in parallel. `progress` receives the fraction done and may return
 // false to cancel (then the result is empty).
-BootstrapCandidates generateCandidates(const Scene& scene, int maxDepth, uint64_t seed,
-                                       int64_t count,
+BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, int maxDepth,
+                                       uint64_t seed, int64_t count,
                                        const std::function<bool(double)>& progress = {});
 
 // Draws `n` candidate indices with probability proportional to contribution (systematic

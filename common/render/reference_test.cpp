@@ -124,6 +124,12 @@ TEST(Reference, CornellBoxBidirectional) {
 TEST(Reference, CornellBoxPssmlt) {
   expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::PSSMLT, 4});
 }
+TEST(Reference, CornellBoxPssmltOverPathTracing) {
+  expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::PSSMLTOverPT, 16});
+}
+TEST(Reference, CornellBoxMultiplexed) {
+  expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::MMLT, 16});
+}
 TEST(Reference, VeachMisPathTracing) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PathTracing, 16});
 }
@@ -132,6 +138,12 @@ TEST(Reference, VeachMisBidirectional) {
 }
 TEST(Reference, VeachMisPssmlt) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PSSMLT, 8});
+}
+TEST(Reference, VeachMisPssmltOverPathTracing) {
+  expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PSSMLTOverPT, 16});
+}
+TEST(Reference, VeachMisMultiplexed) {
+  expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::MMLT, 16});
 }
 
 }  // namespace

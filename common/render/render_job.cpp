@@ -6,10 +6,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/chain/chain_flusher.h"
 #include "common/film/splat_buffer.h"
 #include "common/mcmc/bootstrap.h"
 #include "common/mcmc/pssmlt_chain.h"
-#include "common/render/chain_flusher.h"
 #include "common/scene/film_override.h"
 #include "common/scene/loaders/mitsuba_loader.h"
 #include "common/scene/scene.h"
@@ -118,9 +118,9 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   if (scene_->lights().empty()) {
     throw std::runtime_error("no light reaches the camera: the scene has no emitters");
   }
-  BootstrapCandidates c =
-      generateCandidates(*scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, count,
-                         [&](double f) { return !progress || progress(Progress{f}); });
+  BootstrapCandidates c = generateCandidates(
+      *scene_, settings_.algorithm, resolvedMaxDepth(settings_, *scene_), settings_.seed, count,
+      [&](double f) { return !progress || progress(Progress{f}); });
   if (c.contributions.empty()) throw std::runtime_error("bootstrap cancelled");
   if (!(c.mean > 0)) {
     throw std::runtime_error("no light reaches the camera: none of " + std::to_string(count) +
@@ -134,8 +134,8 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
   for (int64_t i : picks) {
     std::vector<float> u;
-    double I =
-        evaluateCandidate(*scene_, resolvedMaxDepth(settings_, *scene_), settings_.seed, i, &u);
+    double I = evaluateCandidate(*scene_, settings_.algorithm, resolvedMaxDepth(settings_, *scene_),
+                                 settings_.seed, i, &u);
     result.seedSamples.push_back(std::move(u));
     result.seedContributions.push_back(I);
   }

@@ -9,26 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "common/chain/chain_spec.h"
 #include "common/film/image.h"
-#include "common/render/chain_spec.h"
 #include "common/render/render_settings.h"
 
 namespace farm {
 
 class Scene;
-
-// The splats of one flush: the change to the film since the chain's previous flush.
-struct ChainFlush {
-  uint32_t chainIndex = 0;
-  uint32_t flushIndex = 0;  // 0, 1, 2, ... per chain
-  int64_t mutations = 0;    // mutations (or samples) this flush covers
-  int width = 0, height = 0;
-  std::vector<float> splats;   // width*height*3, to be added (in double) to the chain sums
-  int64_t rejectedSplats = 0;  // NaN, Inf or negative splats dropped at the source
-  int64_t rays = 0;            // rays traced for this flush's work (for rays per second)
-  std::string state;           // chain state after this flush (resume with ChainSpec)
-  bool finished = false;       // the chain's budget is spent
-};
 
 struct BootstrapResult {
   // Normalization constant Z: expected scalar contribution (luminance) of one BDPT sample, i.e.

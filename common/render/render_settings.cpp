@@ -5,30 +5,6 @@
 
 namespace farm {
 
-const char* algorithmName(Algorithm a) {
-  switch (a) {
-    case Algorithm::PathTracing:
-      return "pt";
-    case Algorithm::Bidirectional:
-      return "bdpt";
-    case Algorithm::PSSMLT:
-      return "pssmlt";
-  }
-  return "?";
-}
-
-bool parseAlgorithm(const std::string& name, Algorithm* out) {
-  if (name == "pt")
-    *out = Algorithm::PathTracing;
-  else if (name == "bdpt")
-    *out = Algorithm::Bidirectional;
-  else if (name == "pssmlt")
-    *out = Algorithm::PSSMLT;
-  else
-    return false;
-  return true;
-}
-
 std::string RenderSettings::validate() const {
   std::ostringstream err;
   constexpr int kMaxSide = 1 << 16;

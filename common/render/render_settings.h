@@ -3,15 +3,9 @@
 #include <cstdint>
 #include <string>
 
+#include "common/chain/algorithm.h"
+
 namespace farm {
-
-enum class Algorithm { PathTracing, Bidirectional, PSSMLT };
-
-const char* algorithmName(Algorithm a);                        // "pt", "bdpt", "pssmlt"
-bool parseAlgorithm(const std::string& name, Algorithm* out);  // accepts the names above
-inline bool isMarkovChain(Algorithm a) {
-  return a == Algorithm::PSSMLT;
-}
 
 struct RenderSettings {
   Algorithm algorithm = Algorithm::PSSMLT;

@@ -33,7 +33,7 @@ BidirectionalTracer::BidirectionalTracer(const Scene& scene, int maxDepth, MisHe
 
 int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sampler& sampler,
                                     SampleStream stream, TransportMode mode, int maxVertices,
-                                    PathVertex* path) const {
+                                    bool roulette, PathVertex* path) const {
   int count = 1;  // path[0] is the endpoint
   while (count < maxVertices) {
     SurfaceHit hit;
@@ -78,7 +78,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
     beta *= bs.weight;
     if (mode == TransportMode::Importance) beta *= shadingCorrection(v.wo, wi, v.n, v.ns);
     prev.pdfRev = toAreaDensity(pdfRev, v.p, prev);
-    if (count > kRussianRouletteDepth) {
+    if (roulette && count > kRussianRouletteDepth) {
       float q = russianRouletteSurvival(maxComponent(bs.weight));
       if (uRoulette >= q) break;
       beta /= q;
@@ -89,8 +89,8 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
   return count;
 }
 
-int BidirectionalTracer::traceCameraSubpath(const Vec2f& film, Sampler& sampler,
-                                            PathVertex* path) const {
+int BidirectionalTracer::traceCameraSubpath(const Vec2f& film, Sampler& sampler, int maxVertices,
+                                            bool roulette, PathVertex* path) const {
   const Camera& camera = scene_.camera();
   Ray ray = camera.generateRay(film);
   PathVertex& c = path[0];
@@ -100,15 +100,16 @@ int BidirectionalTracer::traceCameraSubpath(const Vec2f& film, Sampler& sampler,
   c.beta = Spectrum(1.0f);  // We / pdf = 1: film points are sampled uniformly
   float pdfDir = camera.importance(ray.d);
   return randomWalk(ray, Spectrum(1.0f), pdfDir, sampler, kCameraStream, TransportMode::Radiance,
-                    maxDepth_ + 1, path);
+                    maxVertices, roulette, path);
 }
 
-int BidirectionalTracer::traceLightSubpath(Sampler& sampler, PathVertex* path) const {
+int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bool roulette,
+                                           PathVertex* path) const {
   float uPick = sampler.next(kLightStream);
   float uPoint[3] = {sampler.next(kLightStream), sampler.next(kLightStream),
                      sampler.next(kLightStream)};
   Vec2f uDir(sampler.next(kLightStream), sampler.next(kLightStream));
-  if (scene_.lights().empty() || maxDepth_ < 1) return 0;
+  if (scene_.lights().empty() || maxVertices < 1) return 0;
   float pickPdf;
   int l = scene_.pickLight(uPick, &pickPdf);
   const AreaLight& light = scene_.lights()[l];
@@ -125,7 +126,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, PathVertex* path) c
   float pdfPos = pickPdf / light.area;
   y.pdfFwd = pdfPos;
   y.beta = light.radiance / pdfPos;
-  if (maxDepth_ < 2) return 1;
+  if (maxVertices < 2) return 1;
   // Area lights emit with a cosine distribution: sample it exactly, so beta keeps pi.
   Vec3f local = squareToCosineHemisphere(uDir);
   float pdfDir = cosineHemispherePdf(local.z);
@@ -133,8 +134,8 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, PathVertex* path) c
   Vec3f d = Frame(n).toWorld(local);
   Spectrum beta = y.beta * (local.z / pdfDir);
   Ray ray = scene_.spawnRay(p, n, d);
-  return randomWalk(ray, beta, pdfDir, sampler, kLightStream, TransportMode::Importance, maxDepth_,
-                    path);
+  return randomWalk(ray, beta, pdfDir, sampler, kLightStream, TransportMode::Importance,
+                    maxVertices, roulette, path);
 }
 
 Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVertex* cameraPath,
@@ -303,8 +304,8 @@ void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
   thread_local std::vector<PathVertex> cameraPath, lightPath;
   if (int(cameraPath.size()) < maxVertices + 1) cameraPath.resize(maxVertices + 1);
   if (int(lightPath.size()) < maxVertices + 1) lightPath.resize(maxVertices + 1);
-  const int nCamera = traceCameraSubpath(film, sampler, cameraPath.data());
-  const int nLight = traceLightSubpath(sampler, lightPath.data());
+  const int nCamera = traceCameraSubpath(film, sampler, maxVertices, true, cameraPath.data());
+  const int nLight = traceLightSubpath(sampler, maxDepth_, true, lightPath.data());
   const float pixelCount = scene_.camera().pixelCount();
   Spectrum cameraSum(0.0f);
   for (int t = 1; t <= nCamera; ++t) {
@@ -326,6 +327,26 @@ void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
     }
   }
   if (!isBlack(cameraSum)) splats->push_back({film, cameraSum * pixelCount});
+}
+
+void BidirectionalTracer::sampleStrategy(const Vec2f& film, Sampler& sampler, int s, int t,
+                                         float scale, std::vector<Splat>* splats) const {
+  if (t < 1 || s < 0 || (s == 0 && t == 1) || s + t - 1 > maxDepth_) return;
+  thread_local std::vector<PathVertex> cameraPath, lightPath;
+  if (int(cameraPath.size()) < t) cameraPath.resize(t);
+  if (int(lightPath.size()) < s + 1) lightPath.resize(s + 1);
+  if (traceCameraSubpath(film, sampler, t, false, cameraPath.data()) < t) return;
+  if (s > 0 && traceLightSubpath(sampler, s, false, lightPath.data()) < s) return;
+  Vec2f splatFilm = film;
+  Spectrum c = connect(lightPath.data(), cameraPath.data(), s, t, &splatFilm);
+  if (isBlack(c)) return;
+  double w = misWeight(lightPath.data(), cameraPath.data(), s, t);
+  if (w <= 0) return;
+  Spectrum value = c * float(w * scale);
+  if (t == 1)
+    splats->push_back({splatFilm, value});
+  else
+    splats->push_back({film, value * scene_.camera().pixelCount()});
 }
 
 }  // namespace farm

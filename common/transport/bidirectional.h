@@ -24,13 +24,21 @@ class BidirectionalTracer {
   // values (camera strategies at `film`, light tracing where the light vertex projects).
   void sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const;
 
+  // One strategy alone, as multiplexed MLT samples it (Hachisuka et al. 2014): a camera subpath
+  // of exactly t vertices and a light subpath of exactly s, without Russian roulette, connected
+  // and weighted by MIS over the strategies of that path length; the splat is scaled by `scale`
+  // (the inverse probability of having chosen this strategy). Nothing when a subpath ends early.
+  void sampleStrategy(const Vec2f& film, Sampler& sampler, int s, int t, float scale,
+                      std::vector<Splat>* splats) const;
+
   uint64_t rays() const { return rays_; }
 
  private:
-  int traceCameraSubpath(const Vec2f& film, Sampler& sampler, PathVertex* path) const;
-  int traceLightSubpath(Sampler& sampler, PathVertex* path) const;
+  int traceCameraSubpath(const Vec2f& film, Sampler& sampler, int maxVertices, bool roulette,
+                         PathVertex* path) const;
+  int traceLightSubpath(Sampler& sampler, int maxVertices, bool roulette, PathVertex* path) const;
   int randomWalk(Ray ray, Spectrum beta, float pdfDir, Sampler& sampler, SampleStream stream,
-                 TransportMode mode, int maxVertices, PathVertex* path) const;
+                 TransportMode mode, int maxVertices, bool roulette, PathVertex* path) const;
   // Unweighted contribution of strategy (s, t); *film set for t == 1.
   Spectrum connect(const PathVertex* light, const PathVertex* camera, int s, int t,
                    Vec2f* film) const;

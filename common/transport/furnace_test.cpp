@@ -101,6 +101,14 @@ TEST(Furnace, Pssmlt) {
   expectFurnace(Algorithm::PSSMLT, -1);
   expectFurnace(Algorithm::PSSMLT, 3);
 }
+TEST(Furnace, PssmltOverPathTracing) {
+  expectFurnace(Algorithm::PSSMLTOverPT, -1);
+  expectFurnace(Algorithm::PSSMLTOverPT, 3);
+}
+TEST(Furnace, Multiplexed) {
+  expectFurnace(Algorithm::MMLT, -1);
+  expectFurnace(Algorithm::MMLT, 3);
+}
 
 // A floor (a large rectangle at y = 0, normal +y) lit by a sphere of radius r at height h,
 // seen from above by a narrow camera, direct light only (maxDepth 2).
@@ -204,6 +212,12 @@ TEST(AnalyticIrradiance, Bidirectional) {
 }
 TEST(AnalyticIrradiance, Pssmlt) {
   expectIrradiance(Algorithm::PSSMLT);
+}
+TEST(AnalyticIrradiance, PssmltOverPathTracing) {
+  expectIrradiance(Algorithm::PSSMLTOverPT);
+}
+TEST(AnalyticIrradiance, Multiplexed) {
+  expectIrradiance(Algorithm::MMLT);
 }
 
 }  // namespace

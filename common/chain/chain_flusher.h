@@ -9,7 +9,7 @@
 #include <string>
 
 #include "common/film/splat_buffer.h"
-#include "common/render/render_job.h"
+#include "common/chain/chain_spec.h"
 #include "common/scene/scene.h"
 
 namespace farm {

@@ -1,4 +1,4 @@
-#include "common/render/chain_flusher.h"
+#include "common/chain/chain_flusher.h"
 
 #include <algorithm>
 

@@ -1,0 +1,51 @@
+#pragma once
+// The work unit of DESIGN.md: everything a worker needs to run one chain and produce the same
+// splats on any host, and what a chain reports back. For pt/bdpt a "chain" is a range of
+// independent samples; for the Markov chain algorithms a chain started from a resampled seed
+// path. Below mcmc/ and transport/ so that every chain kind shares it.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/chain/algorithm.h"
+
+namespace farm {
+
+struct ChainSpec {
+  std::string jobId;
+  uint32_t chainIndex = 0;
+  Algorithm algorithm = Algorithm::PSSMLT;
+  uint64_t seed = 1;  // job seed; the chain's RNG stream is derived from (seed, index)
+  int maxDepth = -1;  // longest path in edges (resolved; -1 unbounded)
+  float largeStepProbability = 0.3f;
+  // pt/bdpt: global index of the first sample (the chain covers [firstSample, firstSample+budget))
+  int64_t firstSample = 0;
+  // The seed: a primary-sample vector (pssmlt, pssmlt-pt, mmlt) or a serialized path (mlt),
+  // and its scalar contribution I.
+  std::vector<float> seedSample;
+  std::string seedPath;
+  double seedContribution = 0;
+  MutationMix mutationMix;  // mlt
+  // mutations (pssmlt) or samples (pt/bdpt) this chain runs; < 0: until told to stop
+  int64_t budget = 0;
+  int64_t flushInterval = 0;  // mutations (or samples) between flushes
+  // Resume: the state a previous flush reported (empty: start from the seed); see ChainFlush.
+  std::string resumeState;
+  int64_t resumeMutations = 0;    // mutations already done when resumeState was taken
+  uint32_t resumeFlushIndex = 0;  // flush index the resumed chain continues with
+};
+
+// The splats of one flush: the change to the film since the chain's previous flush.
+struct ChainFlush {
+  uint32_t chainIndex = 0;
+  uint32_t flushIndex = 0;  // 0, 1, 2, ... per chain
+  int64_t mutations = 0;    // mutations (or samples) this flush covers
+  int width = 0, height = 0;
+  std::vector<float> splats;   // width*height*3, to be added (in double) to the chain sums
+  int64_t rejectedSplats = 0;  // NaN, Inf or negative splats dropped at the source
+  int64_t rays = 0;            // rays traced for this flush's work (for rays per second)
+  std::string state;           // chain state after this flush (resume with ChainSpec)
+  bool finished = false;       // the chain's budget is spent
+};
+
+}  // namespace farm

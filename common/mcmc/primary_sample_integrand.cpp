@@ -1,0 +1,126 @@
+#include "common/mcmc/primary_sample_integrand.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "common/transport/bidirectional.h"
+#include "common/transport/path_tracer.h"
+
+namespace farm {
+
+namespace {
+
+// The film point every integrand starts from: the first two numbers of the camera stream after
+// any technique choice, uniform over the image.
+Vec2f filmPoint(const Camera& camera, Sampler& sampler) {
+  float x = sampler.next(kCameraStream) * camera.width();
+  float y = sampler.next(kCameraStream) * camera.height();
+  return Vec2f(std::min(x, std::nextafter(float(camera.width()), 0.0f)),
+               std::min(y, std::nextafter(float(camera.height()), 0.0f)));
+}
+
+class BidirectionalIntegrand final : public PrimarySampleIntegrand {
+ public:
+  BidirectionalIntegrand(const Scene& scene, int maxDepth)
+      : scene_(scene), tracer_(scene, maxDepth) {}
+  void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
+    tracer_.sample(filmPoint(scene_.camera(), sampler), sampler, splats);
+  }
+  uint64_t rays() const override { return tracer_.rays(); }
+
+ private:
+  const Scene& scene_;
+  BidirectionalTracer tracer_;
+};
+
+class PathTracingIntegrand final : public PrimarySampleIntegrand {
+ public:
+  PathTracingIntegrand(const Scene& scene, int maxDepth)
+      : scene_(scene), tracer_(scene, maxDepth) {}
+  void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
+    tracer_.sample(filmPoint(scene_.camera(), sampler), sampler, splats);
+  }
+  uint64_t rays() const override { return tracer_.rays(); }
+
+ private:
+  const Scene& scene_;
+  PathTracer tracer_;
+};
+
+class MultiplexedIntegrand final : public PrimarySampleIntegrand {
+ public:
+  MultiplexedIntegrand(const Scene& scene, int maxDepth)
+      : scene_(scene), maxDepth_(maxDepth), tracer_(scene, maxDepth) {}
+  void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
+    // The technique numbers come first in the camera stream, at fixed positions, so that a
+    // change of strategy does not shift the numbers the subpaths read.
+    double depthProbability;
+    const int depth =
+        chooseMultiplexedDepth(sampler.next(kCameraStream), maxDepth_, &depthProbability);
+    const int strategies = depth + 1;  // s = 0 .. depth light vertices, t = depth + 1 - s >= 1
+    const int s = std::min(int(sampler.next(kCameraStream) * float(strategies)), strategies - 1);
+    const Vec2f film = filmPoint(scene_.camera(), sampler);
+    tracer_.sampleStrategy(film, sampler, s, depth + 1 - s,
+                           float(double(strategies) / depthProbability), splats);
+  }
+  uint64_t rays() const override { return tracer_.rays(); }
+
+ private:
+  const Scene& scene_;
+  int maxDepth_;
+  BidirectionalTracer tracer_;
+};
+
+}  // namespace
+
+int chooseMultiplexedDepth(float u, int maxDepth, double* probability) {
+  if (maxDepth > 0) {
+    *probability = 1.0 / maxDepth;
+    return std::min(int(u * float(maxDepth)), maxDepth - 1) + 1;
+  }
+  // Geometric: P(depth = k) = (1 - q) q^(k - 1), by inversion; the cap is never reached in
+  // practice (q^4095 underflows) but keeps the depth finite.
+  const double q = kMultiplexedDepthRatio;
+  int depth = 1 + int(std::floor(std::log1p(-double(u)) / std::log(q)));
+  depth = std::clamp(depth, 1, kUnboundedDepth);
+  *probability = (1 - q) * std::pow(q, depth - 1);
+  return depth;
+}
+
+std::unique_ptr<PrimarySampleIntegrand> makePrimarySampleIntegrand(Algorithm algorithm,
+                                                                   const Scene& scene,
+                                                                   int maxDepth) {
+  switch (algorithm) {
+    case Algorithm::PSSMLT:
+      return std::make_unique<BidirectionalIntegrand>(scene, maxDepth);
+    case Algorithm::PSSMLTOverPT:
+      return std::make_unique<PathTracingIntegrand>(scene, maxDepth);
+    case Algorithm::MMLT:
+      return std::make_unique<MultiplexedIntegrand>(scene, maxDepth);
+    default:
+      throw std::invalid_argument(std::string("algorithm ") + algorithmName(algorithm) +
+                                  " has no primary-sample integrand");
+  }
+}
+
+double evaluateContribution(const PrimarySampleIntegrand& integrand, Sampler& sampler,
+                            std::vector<Splat>* splats, int64_t* rejected) {
+  splats->clear();
+  integrand.evaluate(sampler, splats);
+  double sum = 0;
+  size_t kept = 0;
+  for (const Splat& s : *splats) {
+    if (!isValidRadiance(s.value)) {
+      ++*rejected;
+      continue;
+    }
+    (*splats)[kept++] = s;
+    sum += luminance(s.value);
+  }
+  splats->resize(kept);
+  return sum;
+}
+
+}  // namespace farm

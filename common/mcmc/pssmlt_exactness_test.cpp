@@ -1,0 +1,341 @@
+// The primary-sample-space chains are exact, not only their bootstrap. A chain whose image mean
+// is right can still be wrong: with expected-value splatting every mutation deposits the same
+// luminance, so the mean is Z whatever the acceptance does. These tests look at the
+// distribution instead, on targets whose normalized distribution is known:
+//  - a low-dimensional integrand with an analytic answer (peaks, a step, and a third coordinate
+//    that is read only on half the domain, as lazily as path lengths make the real ones);
+//  - the Cornell box, whose per-block shares of luminance the converged reference gives;
+//  - the white furnace, where multiplexed MLT's path lengths have the analytic distribution
+//    rho^(k-1) / sum rho^(j-1).
+// Significance: every test rejects a correct kernel with probability 1e-4 at most (the seeds are
+// fixed, so a given build passes or fails deterministically).
+#include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "common/film/image.h"
+#include "common/mcmc/bootstrap.h"
+#include "common/mcmc/chain_statistics.h"
+#include "common/mcmc/primary_sample_sampler.h"
+#include "common/mcmc/pssmlt_chain.h"
+#include "common/render/render_job.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+namespace {
+
+constexpr double kAlpha = 1e-4;
+const std::string kShared = FARM_SHARED_DIR;
+
+// --- A low-dimensional target with a known answer -----------------------------------------
+
+constexpr int kGrid = 8;  // film of 8 x 8 pixels: one bin per pixel
+
+// g(u0, u1): a floor, a narrow peak and a bright step; the mean of the third coordinate's factor
+// (0.5 + u2) is one, so the (u0, u1) marginal of the whole target is g.
+double targetDensity(double u0, double u1) {
+  double dx = u0 - 0.3, dy = u1 - 0.65;
+  double v = 0.1 + 2.0 * std::exp(-(dx * dx + dy * dy) / 0.01);
+  if (u0 > 0.75 && u1 < 0.25) v += 1.0;
+  return v;
+}
+constexpr double kTargetMax = 0.1 + 2.0 + 1.0;
+
+class TestIntegrand final : public PrimarySampleIntegrand {
+ public:
+  void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
+    float u0 = sampler.next(kCameraStream), u1 = sampler.next(kCameraStream);
+    double v = targetDensity(u0, u1);
+    if (u0 < 0.5f) v *= 0.5 + sampler.next(kCameraStream);
+    splats->push_back({Vec2f(u0 * kGrid, u1 * kGrid), Spectrum(float(v))});
+  }
+  uint64_t rays() const override { return 0; }
+};
+
+int binOf(double u0, double u1) {
+  int x = std::min(int(u0 * kGrid), kGrid - 1), y = std::min(int(u1 * kGrid), kGrid - 1);
+  return x + kGrid * y;
+}
+
+std::vector<double> binProbabilities(double (*density)(double, double)) {
+  const int n = 1024;  // midpoint rule, 128 x 128 points per bin
+  std::vector<double> p(kGrid * kGrid, 0.0);
+  double total = 0;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      double u0 = (i + 0.5) / n, u1 = (j + 0.5) / n;
+      double v = density(u0, u1);
+      p[size_t(binOf(u0, u1))] += v;
+      total += v;
+    }
+  }
+  for (double& v : p) v /= total;
+  return p;
+}
+
+// An exact draw from the whole target (u0, u1, u2), by rejection, in the primary-sample layout
+// (camera stream coordinate k at index 2k).
+std::vector<float> exactSeed(Rng& rng) {
+  for (;;) {
+    float u0 = rng.nextFloat(), u1 = rng.nextFloat(), u2 = rng.nextFloat();
+    double v = targetDensity(u0, u1) * (u0 < 0.5f ? 0.5 + u2 : 1.0);
+    if (rng.nextDouble() * kTargetMax * 1.5 < v)
+      return {u0, rng.nextFloat(), u1, rng.nextFloat(), u2, rng.nextFloat()};
+  }
+}
+
+struct ChainOutcome {
+  std::vector<float> finalState;   // camera-stream coordinates 0 and 1 after the last mutation
+  std::vector<double> splatShare;  // per bin (pixel)
+};
+
+// Runs `chains` production chains over `integrand`, each from its own seed, and collects their
+// final states and splatted shares per pixel.
+std::vector<ChainOutcome> runChains(const Scene& scene, const PrimarySampleIntegrand& integrand,
+                                    const std::vector<std::vector<float>>& seeds, int64_t mutations,
+                                    float largeStep) {
+  std::vector<ChainOutcome> out(seeds.size());
+  tbb::parallel_for(size_t(0), seeds.size(), [&](size_t c) {
+    ChainSpec spec;
+    spec.chainIndex = uint32_t(c);
+    spec.seed = 12345;
+    spec.largeStepProbability = largeStep;
+    spec.budget = mutations;
+    spec.flushInterval = mutations;
+    spec.seedSample = seeds[c];
+    std::vector<double> film;
+    std::string state;
+    runPssmltChain(scene, integrand, spec, [&](ChainFlush&& f) {
+      film.resize(f.splats.size() / 3, 0.0);
+      for (size_t i = 0; i < film.size(); ++i)
+        film[i] += luminance(Spectrum(f.splats[3 * i], f.splats[3 * i + 1], f.splats[3 * i + 2]));
+      state = f.state;
+      return true;
+    });
+    PrimarySampleSampler decoded(0, 0, 0.5f);
+    if (!decoded.deserialize(state)) throw std::runtime_error("undecodable chain state");
+    decoded.setFrozen(true);
+    decoded.startPath();
+    out[c].finalState = {decoded.next(kCameraStream), decoded.next(kCameraStream)};
+    double total = 0;
+    for (double v : film) total += v;
+    for (double& v : film) v /= total;
+    out[c].splatShare = std::move(film);
+  });
+  return out;
+}
+
+TEST(PssmltExactness, LowDimensionalTarget) {
+  SceneDescription desc;
+  desc.camera.width = desc.camera.height = kGrid;
+  desc.camera.filter = FilterType::Box;
+  Scene scene(desc);
+  TestIntegrand integrand;
+  const std::vector<double> p = binProbabilities(targetDensity);
+
+  const int chains = 4000;
+  Rng seedRng(99, 1);
+  std::vector<std::vector<float>> seeds;
+  for (int c = 0; c < chains; ++c) seeds.push_back(exactSeed(seedRng));
+  for (float largeStep : {0.3f, 0.02f}) {
+    std::vector<ChainOutcome> outcomes = runChains(scene, integrand, seeds, 200, largeStep);
+    std::vector<int64_t> counts(p.size(), 0);
+    std::vector<std::vector<double>> shares;
+    for (const ChainOutcome& o : outcomes) {
+      ++counts[size_t(binOf(o.finalState[0], o.finalState[1]))];
+      shares.push_back(o.splatShare);
+    }
+    const double x2 = pearsonChiSquare(counts, p);
+    const double x2Max = chiSquareQuantile(double(p.size() - 1), kAlpha);
+    EXPECT_LE(x2, x2Max) << "final states, large-step probability " << largeStep;
+    ShareTest t = testShares(shares, p, kAlpha);
+    EXPECT_TRUE(t.passed()) << "splatted shares, large-step probability " << largeStep << ": bin "
+                            << t.worstBin << " is " << t.maxAbsZ << " standard errors off (bound "
+                            << t.threshold << ")";
+    std::printf("large step %.2f: chi-square %.1f (bound %.1f), worst share %.2f se (bound %.2f)\n",
+                largeStep, x2, x2Max, t.maxAbsZ, t.threshold);
+  }
+}
+
+// The statistic has the power to see the defects it is there for, at this sample size: final
+// states of a chain that always accepts (uniform after a few large steps) and of one that
+// accepts with min(1, sqrt(I(y) / I(x))) (stationary for sqrt g) are rejected.
+double sqrtTargetDensity(double u0, double u1) {
+  return std::sqrt(targetDensity(u0, u1));
+}
+double uniformDensity(double, double) {
+  return 1;
+}
+
+TEST(PssmltExactness, StatisticSeesWrongTargets) {
+  const std::vector<double> p = binProbabilities(targetDensity);
+  const double x2Max = chiSquareQuantile(double(p.size() - 1), kAlpha);
+  for (auto* wrong : {sqrtTargetDensity, uniformDensity}) {
+    const std::vector<double> q = binProbabilities(wrong);
+    Rng rng(5, 5);
+    std::vector<int64_t> counts(p.size(), 0);
+    for (int c = 0; c < 4000; ++c) {  // draws from the wrong distribution, bin by bin
+      double u = rng.nextDouble(), run = 0;
+      size_t b = 0;
+      while (b + 1 < q.size() && run + q[b] <= u) run += q[b++];
+      ++counts[b];
+    }
+    EXPECT_GT(pearsonChiSquare(counts, p), 10 * x2Max);
+  }
+}
+
+// --- The Cornell box against its converged reference ---------------------------------------
+
+constexpr int kFilm = 32, kBlocks = 4;  // 4 x 4 blocks of 8 x 8 pixels
+
+std::vector<double> referenceBlockShares() {
+  Image ref;
+  std::string error;
+  if (!readExr(kShared + "/references/cornell-box-256.exr", &ref, &error))
+    throw std::runtime_error(error);
+  std::vector<double> shares(kBlocks * kBlocks, 0.0);
+  double total = 0;
+  for (int y = 0; y < ref.height; ++y) {
+    for (int x = 0; x < ref.width; ++x) {
+      double v = luminance(ref.at(x, y));
+      shares[size_t((x * kBlocks / ref.width) + kBlocks * (y * kBlocks / ref.height))] += v;
+      total += v;
+    }
+  }
+  for (double& s : shares) s /= total;
+  return shares;
+}
+
+void expectBlockShares(Algorithm algorithm, int chains, int64_t mutations) {
+  RenderSettings settings;
+  settings.width = settings.height = kFilm;
+  auto loaded = loadScene(kShared + "/scenes/cornell-box/scene.xml", settings);
+  SceneDescription desc = loaded->description();
+  desc.camera.filter = FilterType::Box;  // pixels sum into blocks exactly
+  Scene scene(desc);
+  const int maxDepth = desc.maxDepth;
+  auto integrand = makePrimarySampleIntegrand(algorithm, scene, maxDepth);
+
+  // Seeds drawn independently (multinomial) from 2^18 bootstrap candidates: close to exact
+  // draws from the target, and independent, as the share test needs.
+  const int64_t candidates = int64_t(1) << 18;
+  BootstrapCandidates boot = generateCandidates(scene, algorithm, maxDepth, 77, candidates);
+  std::vector<double> cumulative(boot.contributions.size());
+  double total = 0;
+  for (size_t i = 0; i < cumulative.size(); ++i) cumulative[i] = total += boot.contributions[i];
+  Rng pick(31, 4);
+  std::vector<std::vector<float>> seeds;
+  for (int c = 0; c < chains; ++c) {
+    double u = pick.nextDouble() * total;
+    int64_t i = std::upper_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin();
+    std::vector<float> vector;
+    evaluateCandidate(scene, algorithm, maxDepth, 77, std::min<int64_t>(i, candidates - 1),
+                      &vector);
+    seeds.push_back(std::move(vector));
+  }
+  std::vector<ChainOutcome> outcomes = runChains(scene, *integrand, seeds, mutations, 0.3f);
+  std::vector<std::vector<double>> shares;
+  for (const ChainOutcome& o : outcomes) {
+    std::vector<double> block(kBlocks * kBlocks, 0.0);
+    for (int y = 0; y < kFilm; ++y) {
+      for (int x = 0; x < kFilm; ++x)
+        block[size_t(x * kBlocks / kFilm + kBlocks * (y * kBlocks / kFilm))] +=
+            o.splatShare[size_t(y * kFilm + x)];
+    }
+    shares.push_back(block);
+  }
+  const std::vector<double> expected = referenceBlockShares();
+  ShareTest t = testShares(shares, expected, kAlpha);
+  EXPECT_TRUE(t.passed()) << algorithmName(algorithm) << ": block " << t.worstBin << " is "
+                          << t.maxAbsZ << " standard errors off (bound " << t.threshold << ")";
+  std::printf("%s: worst block %d at %.2f standard errors (bound %.2f)\n", algorithmName(algorithm),
+              t.worstBin, t.maxAbsZ, t.threshold);
+}
+
+TEST(PssmltExactness, CornellBoxBlockSharesBidirectional) {
+  expectBlockShares(Algorithm::PSSMLT, 160, 6000);
+}
+TEST(PssmltExactness, CornellBoxBlockSharesPathTracing) {
+  expectBlockShares(Algorithm::PSSMLTOverPT, 160, 12000);
+}
+TEST(PssmltExactness, CornellBoxBlockSharesMultiplexed) {
+  expectBlockShares(Algorithm::MMLT, 160, 12000);
+}
+
+// --- Multiplexed MLT's path lengths in the white furnace -----------------------------------
+
+// A closed diffuse sphere of albedo rho that emits Le inside: a path of k edges carries
+// Le rho^(k-1) wherever the camera looks, so multiplexed MLT's chains must spend a share
+// rho^(k-1) / sum_j rho^(j-1) of their states at length k. Their final states are compared with
+// that by chi-square, for a bounded depth (uniform length choice) and an unbounded one
+// (geometric choice; lengths above 8 share one bin).
+void expectFurnaceDepths(int maxDepth) {
+  const double rho = 0.6;
+  SceneDescription d;
+  d.camera.fovDegrees = 90;
+  d.camera.width = d.camera.height = 16;
+  d.maxDepth = maxDepth;
+  BsdfDescription b;
+  b.reflectance = Spectrum(float(rho));
+  b.twoSided = true;
+  d.bsdfs.push_back(b);
+  ShapeDescription sphere;
+  sphere.type = ShapeDescription::Type::Sphere;
+  sphere.center = Vec3f(0.1f, -0.05f, 0.2f);
+  sphere.radius = 1.5f;
+  sphere.flipNormals = true;
+  sphere.bsdf = 0;
+  sphere.isEmitter = true;
+  sphere.radiance = Spectrum(1.0f);
+  d.shapes.push_back(sphere);
+  Scene scene(d);
+  auto integrand = makePrimarySampleIntegrand(Algorithm::MMLT, scene, maxDepth);
+
+  const int bins = maxDepth > 0 ? maxDepth : 9;
+  std::vector<double> p(size_t(bins), 0.0);
+  double total = 0;
+  for (int k = 1; k <= (maxDepth > 0 ? maxDepth : 200); ++k) {
+    double w = std::pow(rho, k - 1);
+    p[size_t(std::min(k, bins) - 1)] += w;
+    total += w;
+  }
+  for (double& v : p) v /= total;
+
+  const int64_t candidates = 1 << 16;
+  BootstrapCandidates boot = generateCandidates(scene, Algorithm::MMLT, maxDepth, 5, candidates);
+  std::vector<double> cumulative(boot.contributions.size());
+  double sum = 0;
+  for (size_t i = 0; i < cumulative.size(); ++i) cumulative[i] = sum += boot.contributions[i];
+  Rng pick(8, 8);
+  std::vector<std::vector<float>> seeds;
+  for (int c = 0; c < 3000; ++c) {
+    int64_t i = std::upper_bound(cumulative.begin(), cumulative.end(), pick.nextDouble() * sum) -
+                cumulative.begin();
+    std::vector<float> vector;
+    evaluateCandidate(scene, Algorithm::MMLT, maxDepth, 5, std::min(i, candidates - 1), &vector);
+    seeds.push_back(std::move(vector));
+  }
+  std::vector<ChainOutcome> outcomes = runChains(scene, *integrand, seeds, 300, 0.3f);
+  std::vector<int64_t> counts(size_t(bins), 0);
+  for (const ChainOutcome& o : outcomes) {
+    double probability;
+    int depth = chooseMultiplexedDepth(o.finalState[0], maxDepth, &probability);
+    ++counts[size_t(std::min(depth, bins) - 1)];
+  }
+  const double x2 = pearsonChiSquare(counts, p);
+  const double x2Max = chiSquareQuantile(double(bins - 1), kAlpha);
+  EXPECT_LE(x2, x2Max) << "max depth " << maxDepth;
+  std::printf("mmlt furnace, max depth %d: chi-square %.1f (bound %.1f)\n", maxDepth, x2, x2Max);
+}
+
+TEST(PssmltExactness, MultiplexedPathLengthsInTheFurnace) {
+  expectFurnaceDepths(5);
+  expectFurnaceDepths(-1);
+}
+
+}  // namespace
+}  // namespace farm
