@@ -8,8 +8,8 @@
 #include <functional>
 #include <string>
 
-#include "common/film/splat_buffer.h"
 #include "common/chain/chain_spec.h"
+#include "common/film/splat_buffer.h"
 #include "common/scene/scene.h"
 
 namespace farm {

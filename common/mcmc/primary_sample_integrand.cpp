@@ -12,21 +12,12 @@ namespace farm {
 
 namespace {
 
-// The film point every integrand starts from: the first two numbers of the camera stream after
-// any technique choice, uniform over the image.
-Vec2f filmPoint(const Camera& camera, Sampler& sampler) {
-  float x = sampler.next(kCameraStream) * camera.width();
-  float y = sampler.next(kCameraStream) * camera.height();
-  return Vec2f(std::min(x, std::nextafter(float(camera.width()), 0.0f)),
-               std::min(y, std::nextafter(float(camera.height()), 0.0f)));
-}
-
 class BidirectionalIntegrand final : public PrimarySampleIntegrand {
  public:
   BidirectionalIntegrand(const Scene& scene, int maxDepth)
       : scene_(scene), tracer_(scene, maxDepth) {}
   void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
-    tracer_.sample(filmPoint(scene_.camera(), sampler), sampler, splats);
+    tracer_.sample(primarySampleFilmPoint(scene_.camera(), sampler), sampler, splats);
   }
   uint64_t rays() const override { return tracer_.rays(); }
 
@@ -40,7 +31,7 @@ class PathTracingIntegrand final : public PrimarySampleIntegrand {
   PathTracingIntegrand(const Scene& scene, int maxDepth)
       : scene_(scene), tracer_(scene, maxDepth) {}
   void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
-    tracer_.sample(filmPoint(scene_.camera(), sampler), sampler, splats);
+    tracer_.sample(primarySampleFilmPoint(scene_.camera(), sampler), sampler, splats);
   }
   uint64_t rays() const override { return tracer_.rays(); }
 
@@ -61,7 +52,7 @@ class MultiplexedIntegrand final : public PrimarySampleIntegrand {
         chooseMultiplexedDepth(sampler.next(kCameraStream), maxDepth_, &depthProbability);
     const int strategies = depth + 1;  // s = 0 .. depth light vertices, t = depth + 1 - s >= 1
     const int s = std::min(int(sampler.next(kCameraStream) * float(strategies)), strategies - 1);
-    const Vec2f film = filmPoint(scene_.camera(), sampler);
+    const Vec2f film = primarySampleFilmPoint(scene_.camera(), sampler);
     tracer_.sampleStrategy(film, sampler, s, depth + 1 - s,
                            float(double(strategies) / depthProbability), splats);
   }
@@ -74,6 +65,13 @@ class MultiplexedIntegrand final : public PrimarySampleIntegrand {
 };
 
 }  // namespace
+
+Vec2f primarySampleFilmPoint(const Camera& camera, Sampler& sampler) {
+  float x = sampler.next(kCameraStream) * camera.width();
+  float y = sampler.next(kCameraStream) * camera.height();
+  return Vec2f(std::min(x, std::nextafter(float(camera.width()), 0.0f)),
+               std::min(y, std::nextafter(float(camera.height()), 0.0f)));
+}
 
 int chooseMultiplexedDepth(float u, int maxDepth, double* probability) {
   if (maxDepth > 0) {

@@ -36,6 +36,10 @@ std::unique_ptr<PrimarySampleIntegrand> makePrimarySampleIntegrand(Algorithm alg
                                                                    const Scene& scene,
                                                                    int maxDepth);
 
+// The film point every integrand reads (after any technique choice): two numbers of the camera
+// stream, uniform over the image.
+Vec2f primarySampleFilmPoint(const Camera& camera, Sampler& sampler);
+
 // Evaluates the integrand and keeps only finite, non-negative splats; returns I, their total
 // luminance, and adds the number dropped to *rejected.
 double evaluateContribution(const PrimarySampleIntegrand& integrand, Sampler& sampler,

@@ -60,6 +60,19 @@ Vec3f reflect(const Vec3f& wo, const Vec3f& m) {
   return 2 * dot(wo, m) * m - wo;
 }
 
+// Snell's law about the local normal (0, 0, 1): wo refracted into the other side, with etaTI
+// the index ratio transmitted side / incident side and cosT the refracted cosine (>= 0).
+Vec3f refracted(const Vec3f& wo, float etaTI, float cosT) {
+  float side = wo.z > 0 ? 1.0f : -1.0f;
+  return normalize(-wo / etaTI + Vec3f(0, 0, side * (std::fabs(wo.z) / etaTI - cosT)));
+}
+
+// Directions that agree to this cosine (0.014 radians) are the same Dirac direction. Paths
+// recompute their directions from float vertex positions, and rays start a little off the
+// surface (Scene::spawnRay), which turns an edge of a few millimetres by a few thousandths of a
+// radian; any two lobes of one vertex are much farther apart than this.
+constexpr float kSameDirection = 1 - 1e-4f;
+
 }  // namespace
 
 float fresnelDielectric(float cosThetaI, float eta, float* cosThetaT) {
@@ -217,9 +230,7 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
         return true;
       }
       float etaTI = cosI > 0 ? eta : 1 / eta;  // index ratio transmitted side / incident side
-      float side = cosI > 0 ? 1.0f : -1.0f;
-      Vec3f wi = -wo / etaTI + Vec3f(0, 0, side * (std::fabs(cosI) / etaTI - cosT));
-      out->wi = normalize(wi);
+      out->wi = refracted(wo, etaTI, cosT);
       out->pdf = 1 - fr;
       // Radiance is compressed by (eta_i / eta_t)^2 when it crosses into the denser medium; the
       // adjoint (importance) is not (Veach 1997, eq. 5.15).
@@ -229,6 +240,48 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
     }
   }
   return false;
+}
+
+bool Bsdf::specularDirection(const Vec3f& wo, bool reflection, Vec3f* wi) const {
+  if (type_ != BsdfDescription::Type::Dielectric || wo.z == 0) return false;
+  if (reflection) {
+    *wi = Vec3f(-wo.x, -wo.y, wo.z);
+    return true;
+  }
+  float eta = desc_.intIOR / desc_.extIOR, cosT;
+  if (fresnelDielectric(wo.z, eta, &cosT) >= 1) return false;  // total internal reflection
+  *wi = refracted(wo, wo.z > 0 ? eta : 1 / eta, cosT);
+  return true;
+}
+
+bool Bsdf::specularLobe(const Vec3f& wo, const Vec3f& wi, TransportMode mode, bool* reflection,
+                        float* probability, Spectrum* value) const {
+  if (type_ != BsdfDescription::Type::Dielectric || wo.z == 0) return false;
+  const float eta = desc_.intIOR / desc_.extIOR;
+  float cosT;
+  const float fr = fresnelDielectric(wo.z, eta, &cosT);
+  if (wo.z * wi.z > 0) {
+    if (dot(wi, Vec3f(-wo.x, -wo.y, wo.z)) < kSameDirection) return false;
+    *reflection = true;
+    *probability = fr;
+    *value = Spectrum(fr);
+    return fr > 0;
+  }
+  if (fr >= 1) return false;
+  const float etaTI = wo.z > 0 ? eta : 1 / eta;
+  if (dot(wi, refracted(wo, etaTI, cosT)) < kSameDirection) return false;
+  *reflection = false;
+  *probability = 1 - fr;
+  // As sample(): radiance is compressed by (eta_i / eta_t)^2 entering the denser side.
+  *value = Spectrum((1 - fr) * (mode == TransportMode::Radiance ? 1 / (etaTI * etaTI) : 1.0f));
+  return true;
+}
+
+float Bsdf::diracJacobian(const Vec3f& a, const Vec3f& b) const {
+  if (a.z * b.z >= 0) return 1;  // reflection
+  const float etaA = a.z > 0 ? desc_.extIOR : desc_.intIOR;
+  const float etaB = b.z > 0 ? desc_.extIOR : desc_.intIOR;
+  return (etaB * etaB * std::fabs(b.z)) / (etaA * etaA * std::fabs(a.z));
 }
 
 }  // namespace farm

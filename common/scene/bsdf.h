@@ -29,6 +29,22 @@ class Bsdf {
   bool sample(const Vec3f& wo, const float u[3], TransportMode mode, BsdfSample* out) const;
 
   bool isDelta() const { return type_ == BsdfDescription::Type::Dielectric; }
+
+  // Dirac lobes, for the path-space mutations, which evaluate paths through specular vertices
+  // by the coefficients of their delta functions (Veach 1997, 8.3.2).
+  // The direction the reflection (or refraction) lobe takes wo to; false where it does not
+  // exist (refraction beyond the critical angle) or the BSDF has no Dirac lobes.
+  bool specularDirection(const Vec3f& wo, bool reflection, Vec3f* wi) const;
+  // When wi is (to rounding) where a Dirac lobe takes wo: which lobe, the probability with which
+  // sample() chooses it, and its value f |cos wi| / delta for `mode` (the Fresnel term, times the
+  // radiance compression of refraction). False otherwise.
+  bool specularLobe(const Vec3f& wo, const Vec3f& wi, TransportMode mode, bool* reflection,
+                    float* probability, Spectrum* value) const;
+  // For directions a and b that a Dirac lobe joins, the ratio of solid angles d(omega_a) /
+  // d(omega_b) of the lobe's map from b to a: one for reflection, (eta_b^2 |cos b|) /
+  // (eta_a^2 |cos a|) for refraction (etendue is kept: eta^2 cos d(omega) is the same on both
+  // sides). It converts a delta function in one direction into one in the other.
+  float diracJacobian(const Vec3f& a, const Vec3f& b) const;
   bool isBlack() const;  // reflects nothing at all (e.g. the black diffuse of a light)
   const BsdfDescription& description() const { return desc_; }
 

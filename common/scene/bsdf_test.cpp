@@ -208,3 +208,58 @@ TEST(Bsdf, StiffParametersStayFiniteAndConsistent) {
 
 }  // namespace
 }  // namespace farm
+
+namespace farm {
+namespace {
+
+// The Dirac lobes as the path-space mutations see them: every direction sample() produces is
+// recognized by specularLobe() as the same lobe, with sample()'s probability and with value /
+// probability equal to sample()'s weight; specularDirection() reproduces it; and directions a
+// little off the lobe are not recognized.
+TEST(DielectricLobes, SpecularLobeAgreesWithSample) {
+  BsdfDescription glass;
+  glass.type = BsdfDescription::Type::Dielectric;
+  glass.intIOR = 1.5f;
+  glass.extIOR = 1.0f;
+  Bsdf bsdf(glass);
+  Rng rng(3, 3);
+  int reflections = 0, refractions = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Vec3f wo = squareToUniformSphere({rng.nextFloat(), rng.nextFloat()});
+    if (std::fabs(wo.z) < 1e-3f) continue;
+    for (TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
+      float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+      BsdfSample s;
+      ASSERT_TRUE(bsdf.sample(wo, u, mode, &s));
+      bool reflection;
+      float probability;
+      Spectrum value;
+      ASSERT_TRUE(bsdf.specularLobe(wo, s.wi, mode, &reflection, &probability, &value))
+          << "wo " << wo.x << " " << wo.y << " " << wo.z;
+      EXPECT_EQ(reflection, wo.z * s.wi.z > 0);
+      EXPECT_FLOAT_EQ(probability, s.pdf);
+      EXPECT_NEAR(value.y / probability, s.weight.y, 1e-5f * s.weight.y);
+      Vec3f again;
+      ASSERT_TRUE(bsdf.specularDirection(wo, reflection, &again));
+      EXPECT_GT(dot(again, s.wi), 1 - 1e-6f);  // the same computation: to rounding
+      (reflection ? reflections : refractions)++;
+      // Three hundredths of a radian off the lobe is another direction.
+      Vec3f off = normalize(s.wi + 3e-2f * Frame(s.wi).s);
+      EXPECT_FALSE(bsdf.specularLobe(wo, off, mode, &reflection, &probability, &value));
+    }
+  }
+  EXPECT_GT(reflections, 1000);
+  EXPECT_GT(refractions, 1000);
+  // Not a Dirac BSDF: nothing is a Dirac direction.
+  Bsdf diffuse{BsdfDescription()};
+  Vec3f wi;
+  bool reflection;
+  float probability;
+  Spectrum value;
+  EXPECT_FALSE(diffuse.specularDirection(Vec3f(0, 0, 1), true, &wi));
+  EXPECT_FALSE(diffuse.specularLobe(Vec3f(0, 0, 1), Vec3f(0, 0, 1), TransportMode::Radiance,
+                                    &reflection, &probability, &value));
+}
+
+}  // namespace
+}  // namespace farm

@@ -298,8 +298,9 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
   return 1 / sum;
 }
 
-void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
-                                 std::vector<Splat>* splats) const {
+void BidirectionalTracer::visitStrategies(
+    const Vec2f& film, Sampler& sampler,
+    const std::function<void(const StrategyPath&)>& visit) const {
   const int maxVertices = maxDepth_ + 1;
   thread_local std::vector<PathVertex> cameraPath, lightPath;
   if (int(cameraPath.size()) < maxVertices + 1) cameraPath.resize(maxVertices + 1);
@@ -307,7 +308,6 @@ void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
   const int nCamera = traceCameraSubpath(film, sampler, maxVertices, true, cameraPath.data());
   const int nLight = traceLightSubpath(sampler, maxDepth_, true, lightPath.data());
   const float pixelCount = scene_.camera().pixelCount();
-  Spectrum cameraSum(0.0f);
   for (int t = 1; t <= nCamera; ++t) {
     for (int s = 0; s <= nLight; ++s) {
       const int edges = s + t - 1;
@@ -318,15 +318,23 @@ void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
       if (isBlack(c)) continue;
       double w = misWeight(lightPath.data(), cameraPath.data(), s, t);
       if (w <= 0) continue;
-      Spectrum value = c * float(w);
-      if (t == 1) {
-        splats->push_back({splatFilm, value});
-      } else {
-        cameraSum += value;
-      }
+      visit({lightPath.data(), s, cameraPath.data(), t, t == 1 ? c : c * pixelCount, w, splatFilm});
     }
   }
-  if (!isBlack(cameraSum)) splats->push_back({film, cameraSum * pixelCount});
+}
+
+void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
+                                 std::vector<Splat>* splats) const {
+  // Camera strategies share the film point: one splat for their sum.
+  Spectrum cameraSum(0.0f);
+  visitStrategies(film, sampler, [&](const StrategyPath& p) {
+    Spectrum value = p.unweighted * float(p.weight);
+    if (p.t == 1)
+      splats->push_back({p.film, value});
+    else
+      cameraSum += value;
+  });
+  if (!isBlack(cameraSum)) splats->push_back({film, cameraSum});
 }
 
 void BidirectionalTracer::sampleStrategy(const Vec2f& film, Sampler& sampler, int s, int t,

@@ -4,6 +4,7 @@
 // Densities are kept per vertex in area measure, in both directions, so that MIS weights are
 // ratios of products along the path (Veach 1997, eq. 10.9).
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "common/film/splat_buffer.h"
@@ -23,6 +24,23 @@ class BidirectionalTracer {
   // One bidirectional sample: both subpaths, every connection; splats carry the estimator's
   // values (camera strategies at `film`, light tracing where the light vertex projects).
   void sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const;
+
+  // What each strategy of a sample built: its subpaths (the path is light[0 .. s-1] followed by
+  // camera[t-1 .. 0]), its unweighted value f / p as a splat would carry it (the pixel count
+  // included), its MIS weight and its film point.
+  struct StrategyPath {
+    const PathVertex* light;
+    int s;
+    const PathVertex* camera;
+    int t;
+    Spectrum unweighted;
+    double weight;
+    Vec2f film;
+  };
+  // The same sample as sample(), reporting every strategy that carries light to `visit`
+  // instead of splatting (the seeds of path-space chains come from here).
+  void visitStrategies(const Vec2f& film, Sampler& sampler,
+                       const std::function<void(const StrategyPath&)>& visit) const;
 
   // One strategy alone, as multiplexed MLT samples it (Hachisuka et al. 2014): a camera subpath
   // of exactly t vertices and a light subpath of exactly s, without Russian roulette, connected

@@ -18,11 +18,23 @@ double toAreaDensity(double pdfSolidAngle, const Vec3f& from, const Vec3f& to, c
 namespace {
 
 // Solid-angle density of leaving surface vertex v towards `to`, having arrived from `from`.
-double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& from, const Vec3f& to) {
+// For a Dirac BSDF, the coefficient of the delta function: the probability of the lobe that does
+// it (zero when none does), with the delta taken, as in Path::contribution, in the direction
+// towards the light. Sampling from the light side puts it in the other direction: the lobe's
+// solid-angle ratio converts it.
+double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& from, const Vec3f& to,
+                  bool fromLightSide) {
   Frame frame(v.ns);
   Vec3f wo = frame.toLocal(normalize(from - v.p));
   Vec3f wi = frame.toLocal(normalize(to - v.p));
-  return scene.bsdfOf(v.shape).pdf(wo, wi);
+  const Bsdf& bsdf = scene.bsdfOf(v.shape);
+  if (!bsdf.isDelta()) return bsdf.pdf(wo, wi);
+  bool reflection;
+  float probability;
+  Spectrum value;
+  if (!bsdf.specularLobe(wo, wi, TransportMode::Radiance, &reflection, &probability, &value))
+    return 0;
+  return fromLightSide ? double(probability) * bsdf.diracJacobian(wo, wi) : double(probability);
 }
 
 }  // namespace
@@ -45,8 +57,8 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
   }
   for (int i = 2; i < n - 1; ++i) {
     const PathVertex& prev = *x[i - 1];
-    if (delta[i - 1]) continue;
-    pL[i] = toAreaDensity(scatterPdf(scene, prev, x[i - 2]->p, x[i]->p), prev.p, x[i]->p, x[i]->n);
+    pL[i] = toAreaDensity(scatterPdf(scene, prev, x[i - 2]->p, x[i]->p, true), prev.p, x[i]->p,
+                          x[i]->n);
   }
   // From the camera side: x_{n-2} through the camera's importance (a direction density), the
   // rest by BSDF sampling at their successor. The pinhole itself has no density (pE = 0).
@@ -55,8 +67,8 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
   pE[n - 2] = toAreaDensity(scene.camera().importance(toFirst), camera.p, x[n - 2]->p, x[n - 2]->n);
   for (int i = n - 3; i >= 0; --i) {
     const PathVertex& next = *x[i + 1];
-    if (delta[i + 1]) continue;
-    pE[i] = toAreaDensity(scatterPdf(scene, next, x[i + 2]->p, x[i]->p), next.p, x[i]->p, x[i]->n);
+    pE[i] = toAreaDensity(scatterPdf(scene, next, x[i + 2]->p, x[i]->p, false), next.p, x[i]->p,
+                          x[i]->n);
   }
 }
 

@@ -31,9 +31,11 @@ double toAreaDensity(double pdfSolidAngle, const Vec3f& from, const Vec3f& to, c
 // The densities of every vertex of a whole path x_0 .. x_{n-1} (x_0 on a light, x_{n-1} the
 // camera) computed from the vertices alone, in one fixed order of operations: pL[i] is the area
 // density of x_i sampled from the light side (x_0 by light selection and area sampling, x_1 by
-// emission, then by the BSDFs), pE[i] from the camera side. Zero where a Dirac lobe samples the
-// vertex, or where nothing can (the camera from the light side). Strategy (s, t = n - s) has
-// density prod_{i<s} pL[i] prod_{i>=s} pE[i] (Veach 1997, eq. 10.8). `path[i]` points at x_i;
+// emission, then by the BSDFs), pE[i] from the camera side. Where a Dirac lobe samples the
+// vertex, the lobe's selection probability times the geometric factor (the coefficient of the
+// delta function); zero where nothing can sample it (the camera from the light side, the pinhole
+// from the camera side). MIS treats the Dirac entries as common factors. Strategy (s, t = n - s)
+// has density prod_{i<s} pL[i] prod_{i>=s} pE[i] (Veach 1997, eq. 10.8). `path[i]` points at x_i;
 // `delta[i]` receives whether x_i scatters only through Dirac lobes.
 void pathDensities(const Scene& scene, const PathVertex* const* path, int n, double* pL, double* pE,
                    char* delta);

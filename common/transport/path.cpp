@@ -1,0 +1,202 @@
+#include "common/transport/path.h"
+
+#include <cstring>
+
+#include "common/scene/scene.h"
+
+namespace farm {
+
+namespace {
+
+// A product of RGB and scalar factors kept as rgb * exp(logScale), renormalized at every step:
+// paths of hundreds of vertices, lights of 1e9 and scenes of 1e-4 units neither overflow nor
+// underflow it.
+class ScaledProduct {
+ public:
+  void multiply(const Spectrum& s) {
+    for (int c = 0; c < 3; ++c) {
+      if (!(s[c] >= 0) || !std::isfinite(s[c])) ok_ = false;
+      rgb_[c] *= double(s[c]);
+    }
+    renormalize();
+  }
+  void multiply(double v) {
+    if (!(v > 0) || !std::isfinite(v)) {
+      ok_ = false;
+      return;
+    }
+    logScale_ += std::log(v);
+  }
+  void fail() { ok_ = false; }
+  bool finish(PathContribution* out) const {
+    if (!ok_) return false;
+    double lum = 0.2126 * rgb_[0] + 0.7152 * rgb_[1] + 0.0722 * rgb_[2];
+    if (!(lum > 0)) return false;
+    out->logLuminance = logScale_ + std::log(lum);
+    out->color = Spectrum(float(rgb_[0] / lum), float(rgb_[1] / lum), float(rgb_[2] / lum));
+    return true;
+  }
+
+ private:
+  void renormalize() {
+    double m = std::max(rgb_[0], std::max(rgb_[1], rgb_[2]));
+    if (!(m > 0) || !std::isfinite(m)) {
+      ok_ = false;
+      return;
+    }
+    logScale_ += std::log(m);
+    for (double& c : rgb_) c /= m;
+  }
+  double rgb_[3] = {1, 1, 1};
+  double logScale_ = 0;
+  bool ok_ = true;
+};
+
+template <typename T>
+void put(std::string& s, const T& v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+template <typename T>
+bool get(const std::string& s, size_t& at, T* v) {
+  if (at + sizeof(T) > s.size()) return false;
+  std::memcpy(v, s.data() + at, sizeof(T));
+  at += sizeof(T);
+  return true;
+}
+constexpr uint32_t kPathMagic = 0x31485450;  // "PTH1"
+
+}  // namespace
+
+double geometricConversion(const PathVertex& from, const PathVertex& to) {
+  return toAreaDensity(1.0, from.p, to.p, to.n);
+}
+
+Path Path::fromSubpaths(const PathVertex* light, int s, const PathVertex* camera, int t) {
+  Path path;
+  path.vertices.reserve(size_t(s + t));
+  for (int i = 0; i < s; ++i) path.vertices.push_back(light[i]);
+  for (int i = t - 1; i >= 0; --i) path.vertices.push_back(camera[i]);
+  return path;
+}
+
+bool Path::isSpecular(const Scene& scene, int i) const {
+  const PathVertex& v = vertices[size_t(i)];
+  return v.kind == PathVertex::Kind::Surface && v.shape >= 0 && scene.bsdfOf(v.shape).isDelta();
+}
+
+PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
+  PathContribution out;
+  const int k = length();
+  if (k < 1 || (maxDepth >= 0 && k > maxDepth)) return out;
+  const PathVertex& x0 = vertices[0];
+  const PathVertex& camera = vertices[size_t(k)];
+  if (x0.light < 0 || camera.kind != PathVertex::Kind::Camera) return out;
+  for (int i = 1; i < k; ++i) {
+    if (vertices[size_t(i)].kind != PathVertex::Kind::Surface) return out;
+  }
+
+  ScaledProduct f;
+  auto direction = [&](int from, int to, double* d2) {
+    Vec3f d = vertices[size_t(to)].p - vertices[size_t(from)].p;
+    *d2 = double(lengthSquared(d));
+    return d / std::sqrt(float(*d2));
+  };
+  // Emission towards x_1.
+  double d2;
+  Vec3f w = direction(0, 1, &d2);
+  if (!(d2 > 0)) return out;
+  f.multiply(scene.emitted(x0.light, x0.n, w));
+  // Edges into surface vertices, and the scattering there.
+  for (int i = 0; i + 1 < k; ++i) {
+    const PathVertex& sender = vertices[size_t(i)];
+    const PathVertex& v = vertices[size_t(i + 1)];
+    w = direction(i, i + 1, &d2);
+    f.multiply(double(absDot(sender.n, w)) / d2);
+    double d2Next;
+    const Vec3f wo = direction(i + 1, i + 2, &d2Next);  // towards the camera
+    const Vec3f wi = -w;                                // towards the light
+    if (!(d2Next > 0) || !sidesAgree(wi, v.n, v.ns) || !sidesAgree(wo, v.n, v.ns)) return out;
+    const Bsdf& bsdf = scene.bsdfOf(v.shape);
+    Frame frame(v.ns);
+    Vec3f lo = frame.toLocal(wo), li = frame.toLocal(wi);
+    if (bsdf.isDelta()) {
+      // The delta's coefficient over |cos|, times the receiving cosine: the lobe's value.
+      bool reflection;
+      float probability;
+      Spectrum value;
+      if (!bsdf.specularLobe(lo, li, TransportMode::Radiance, &reflection, &probability, &value))
+        return out;
+      f.multiply(value);
+    } else {
+      f.multiply(bsdf.eval(lo, li, TransportMode::Radiance));
+      f.multiply(double(std::fabs(li.z)));
+    }
+  }
+  // The camera's edge: importance per unit solid angle, the sender's cosine over d^2, and the
+  // pixel count of the splat convention.
+  const PathVertex& last = vertices[size_t(k - 1)];
+  w = direction(k - 1, k, &d2);
+  const Camera& cam = scene.camera();
+  if (!cam.project(-w, &out.film)) return out;
+  f.multiply(double(cam.importance(-w)) * double(absDot(last.n, w)) / d2 *
+             double(cam.pixelCount()));
+  if (!f.finish(&out)) out.logLuminance = -INFINITY;
+  return out;
+}
+
+void Path::densities(const Scene& scene, double* pL, double* pE, char* delta) const {
+  std::vector<const PathVertex*> pointers;
+  pointers.reserve(vertices.size());
+  for (const PathVertex& v : vertices) pointers.push_back(&v);
+  pathDensities(scene, pointers.data(), int(pointers.size()), pL, pE, delta);
+}
+
+std::string Path::serialize() const {
+  std::string s;
+  put(s, kPathMagic);
+  put(s, uint32_t(vertices.size()));
+  for (const PathVertex& v : vertices) {
+    put(s, uint8_t(v.kind));
+    for (const Vec3f* x : {&v.p, &v.n, &v.ns}) put(s, *x);
+    put(s, int32_t(v.shape));
+    put(s, int32_t(v.light));
+  }
+  return s;
+}
+
+bool Path::deserialize(const std::string& bytes, const Scene& scene) {
+  size_t at = 0;
+  uint32_t magic, count;
+  if (!get(bytes, at, &magic) || magic != kPathMagic || !get(bytes, at, &count)) return false;
+  constexpr size_t kVertexBytes = 1 + 9 * sizeof(float) + 2 * sizeof(int32_t);
+  if (count < 2 || count > (bytes.size() - at) / kVertexBytes) return false;
+  const int shapes = int(scene.description().shapes.size());
+  const int lights = int(scene.lights().size());
+  std::vector<PathVertex> read(count);
+  for (uint32_t i = 0; i < count; ++i) {
+    PathVertex& v = read[i];
+    uint8_t kind;
+    int32_t shape, light;
+    if (!get(bytes, at, &kind) || !get(bytes, at, &v.p) || !get(bytes, at, &v.n) ||
+        !get(bytes, at, &v.ns) || !get(bytes, at, &shape) || !get(bytes, at, &light))
+      return false;
+    if (kind > uint8_t(PathVertex::Kind::Surface)) return false;
+    v.kind = PathVertex::Kind(kind);
+    v.shape = shape;
+    v.light = light;
+    if (!isFinite(v.p) || !isFinite(v.n) || !isFinite(v.ns)) return false;
+    const bool isCamera = v.kind == PathVertex::Kind::Camera;
+    if (isCamera != (i + 1 == count)) return false;  // the camera, and only it, ends the path
+    if (!isCamera) {
+      if (shape < 0 || shape >= shapes) return false;
+      if (light != scene.lightOf(shape)) return false;
+    } else if (shape != -1 || light != -1) {
+      return false;
+    }
+  }
+  if (read[0].light < 0 || at != bytes.size() || lights == 0) return false;
+  vertices = std::move(read);
+  return true;
+}
+
+}  // namespace farm

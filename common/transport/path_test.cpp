@@ -1,0 +1,133 @@
+// The path-space representation agrees with the estimator it comes from: for every strategy
+// (s, t) of many BDPT samples, f(x) of the path it built divided by the strategy's density
+// prod_{i<s} pL[i] prod_{i>=s} pE[i] (both from the vertices alone) is the unweighted value BDPT
+// computed along the way, colour and film point included, on the shared scenes (diffuse, glossy
+// conductors, glass and water). Paths of at most five vertices: BDPT's Russian roulette starts
+// later, so the densities are exactly its sampling densities. And a path survives its byte form.
+//
+// BDPT starts each ray a small distance off the surface (Scene::spawnRay), so the edge between two
+// of its vertices points up to about 1e-4 radians away from the direction it sampled. Diffuse and
+// specular vertices do not notice (the Dirac lobes are recognized to 0.014 radians); a glossy
+// lobe of roughness 0.01 changes by several per cent over that angle. So paths through rough
+// conductors are held to their median and 90th percentile, all others to every single value.
+#include "common/transport/path.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "common/mcmc/primary_sample_integrand.h"
+#include "common/render/render_job.h"
+#include "common/scene/scene.h"
+#include "common/transport/bidirectional.h"
+
+namespace farm {
+namespace {
+
+const std::string kShared = FARM_SHARED_DIR;
+
+void expectContributionsMatch(const std::string& name) {
+  RenderSettings settings;
+  settings.width = 64;
+  settings.height = 64;
+  auto scene = loadScene(kShared + "/scenes/" + name + "/scene.xml", settings);
+  const int maxDepth = 4;
+  BidirectionalTracer tracer(*scene, maxDepth);
+  Rng rng(11, 7);
+  IndependentSampler sampler(&rng);
+  std::vector<double> pL(16), pE(16), glossyErrors;
+  std::vector<char> delta(16);
+  int strategies = 0, specular = 0;
+  for (int i = 0; i < 12000; ++i) {
+    Vec2f film = primarySampleFilmPoint(scene->camera(), sampler);
+    tracer.visitStrategies(film, sampler, [&](const BidirectionalTracer::StrategyPath& sp) {
+      Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+      PathContribution f = x.contribution(*scene, maxDepth);
+      ASSERT_TRUE(f.carriesLight()) << name << " strategy (" << sp.s << ", " << sp.t << ")";
+      x.densities(*scene, pL.data(), pE.data(), delta.data());
+      const int n = int(x.vertices.size());
+      double logP = 0;
+      for (int j = 0; j < sp.s; ++j) logP += std::log(pL[size_t(j)]);
+      for (int j = sp.s; j < n - 1; ++j) logP += std::log(pE[size_t(j)]);  // not the pinhole
+      const double expected = std::exp(f.logLuminance - logP);
+      const double actual = luminance(sp.unweighted);
+      const double error = std::fabs(actual - expected) / expected;
+      bool glossy = false;
+      for (int j = 1; j + 1 < n; ++j) {
+        glossy |=
+            scene->bsdfOf(x[j].shape).description().type == BsdfDescription::Type::RoughConductor;
+        specular += x.isSpecular(*scene, j);
+      }
+      if (glossy) {
+        glossyErrors.push_back(error);
+      } else {
+        EXPECT_LT(error, 1e-2) << name << " strategy (" << sp.s << ", " << sp.t << ")";
+        Spectrum color = sp.unweighted / float(actual);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(color[c], f.color[c], 1e-3f * (1 + f.color[c]));
+      }
+      if (sp.t == 1) {  // light tracing splats where the path projects
+        EXPECT_NEAR(sp.film.x, f.film.x, 1e-2f);
+        EXPECT_NEAR(sp.film.y, f.film.y, 1e-2f);
+      }
+      ++strategies;
+
+      Path y;
+      ASSERT_TRUE(y.deserialize(x.serialize(), *scene));
+      ASSERT_EQ(y.vertices.size(), x.vertices.size());
+      EXPECT_EQ(y.contribution(*scene, maxDepth).logLuminance, f.logLuminance);
+    });
+  }
+  EXPECT_GT(strategies, 1000) << name;
+  if (name == "veach-bidir" || name == "water-caustic") {
+    EXPECT_GT(specular, 50) << name << ": too few specular vertices to test them";
+  }
+  if (!glossyErrors.empty()) {
+    std::sort(glossyErrors.begin(), glossyErrors.end());
+    EXPECT_GT(glossyErrors.size(), 200u) << name;
+    EXPECT_LT(glossyErrors[glossyErrors.size() / 2], 1e-3) << name << " (median)";
+    EXPECT_LT(glossyErrors[glossyErrors.size() * 9 / 10], 1e-2) << name << " (90th percentile)";
+  }
+}
+
+TEST(Path, ContributionOverDensityIsTheBidirectionalEstimate) {
+  for (const char* name : {"cornell-box", "veach-mis", "veach-bidir", "water-caustic"})
+    expectContributionsMatch(name);
+}
+
+TEST(Path, DeserializeRefusesWhatIsNotAPathOfTheScene) {
+  RenderSettings settings;
+  settings.width = settings.height = 16;
+  auto scene = loadScene(kShared + "/scenes/cornell-box/scene.xml", settings);
+  Path x;
+  EXPECT_FALSE(x.deserialize("", *scene));
+  EXPECT_FALSE(x.deserialize("PTH1 and some garbage bytes", *scene));
+  // A real path, then damaged: truncated, a shape out of range, a NaN coordinate.
+  BidirectionalTracer tracer(*scene, 4);
+  Rng rng(1, 1);
+  IndependentSampler sampler(&rng);
+  std::string bytes;
+  while (bytes.empty()) {
+    tracer.visitStrategies(primarySampleFilmPoint(scene->camera(), sampler), sampler,
+                           [&](const BidirectionalTracer::StrategyPath& sp) {
+                             if (bytes.empty())
+                               bytes =
+                                   Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t).serialize();
+                           });
+  }
+  ASSERT_TRUE(x.deserialize(bytes, *scene));
+  EXPECT_FALSE(x.deserialize(bytes.substr(0, bytes.size() - 1), *scene));
+  std::string badShape = bytes;
+  const int32_t huge = 1 << 30;
+  std::memcpy(&badShape[8 + 1 + 36], &huge, sizeof(huge));  // the first vertex's shape
+  EXPECT_FALSE(x.deserialize(badShape, *scene));
+  std::string nan = bytes;
+  const float qnan = std::nanf("");
+  std::memcpy(&nan[8 + 1], &qnan, sizeof(qnan));  // the first vertex's x coordinate
+  EXPECT_FALSE(x.deserialize(nan, *scene));
+}
+
+}  // namespace
+}  // namespace farm
