@@ -45,6 +45,7 @@ struct RenderOptions {
   std::string seed = "1";  // parsed by hand: CLI11 would wrap "-1" around to 2^64 - 1
   std::string reference;
   float largeStep = farm::RenderSettings().largeStepProbability;
+  std::string mutationMix;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -52,16 +53,23 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
   command
       ->add_option("--algorithm", o->algorithm,
                    "pt (path tracing), bdpt (bidirectional), pssmlt (primary-sample MLT over "
-                   "bdpt), pssmlt-pt (the same over pt), mmlt (multiplexed MLT)")
+                   "bdpt), pssmlt-pt (the same over pt), mmlt (multiplexed MLT), mlt (path-space "
+                   "MLT with Veach's mutations)")
       ->default_str("pssmlt");
   command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt)")->default_str("16");
-  command->add_option("--mpp", o->mpp, "mutations per pixel (pssmlt, pssmlt-pt, mmlt)")
+  command->add_option("--mpp", o->mpp, "mutations per pixel (pssmlt, pssmlt-pt, mmlt, mlt)")
       ->default_str("16");
   command
       ->add_option("--large-step", o->largeStep,
                    "probability of a large step, a fresh independent sample (pssmlt, pssmlt-pt, "
                    "mmlt; Kelemen et al. 2002)")
       ->default_str(std::to_string(o->largeStep).substr(0, 3));
+  command
+      ->add_option("--mutation-mix", o->mutationMix,
+                   "mlt: relative weights of Veach's mutations, normalized over those that apply "
+                   "to the current path: bidir (bidirectional), lens-subpath, lens (lens "
+                   "perturbation), caustic, multichain; names left out keep their defaults")
+      ->default_str(farm::formatMutationMix(farm::MutationMix()));
   o->timeOption = command->add_option(
       "--time", o->time,
       "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
@@ -114,6 +122,10 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     return false;
   }
   s->largeStepProbability = o.largeStep;
+  if (!farm::parseMutationMix(o.mutationMix, &s->mutationMix, error)) {
+    *error = "--mutation-mix: " + *error;
+    return false;
+  }
   s->samplesPerPixel = o.spp;
   s->mutationsPerPixel = o.mpp;
   s->timeBudgetSeconds = o.timeOption->count() ? o.time : 0;

@@ -10,8 +10,35 @@ struct AlgorithmPair {
 constexpr AlgorithmPair kAlgorithms[] = {
     {Algorithm::PathTracing, v1::PT}, {Algorithm::Bidirectional, v1::BDPT},
     {Algorithm::PSSMLT, v1::PSSMLT},  {Algorithm::PSSMLTOverPT, v1::PSSMLT_PT},
-    {Algorithm::MMLT, v1::MMLT},
+    {Algorithm::MMLT, v1::MMLT},      {Algorithm::MLT, v1::MLT},
 };
+void toProto(const MutationMix& mix, v1::MutationMix* m) {
+  m->set_bidirectional(mix.bidirectional);
+  m->set_lens_subpath(mix.lensSubpath);
+  m->set_lens_perturbation(mix.lensPerturbation);
+  m->set_caustic_perturbation(mix.causticPerturbation);
+  m->set_multi_chain_perturbation(mix.multiChainPerturbation);
+}
+
+// An absent mix (all zero) is the default one; any other must be usable.
+bool fromProto(const v1::MutationMix& m, MutationMix* out, std::string* error) {
+  MutationMix mix;
+  if (m.bidirectional() != 0 || m.lens_subpath() != 0 || m.lens_perturbation() != 0 ||
+      m.caustic_perturbation() != 0 || m.multi_chain_perturbation() != 0) {
+    mix.bidirectional = m.bidirectional();
+    mix.lensSubpath = m.lens_subpath();
+    mix.lensPerturbation = m.lens_perturbation();
+    mix.causticPerturbation = m.caustic_perturbation();
+    mix.multiChainPerturbation = m.multi_chain_perturbation();
+  }
+  std::string problem = validateMutationMix(mix);
+  if (!problem.empty()) {
+    *error = problem;
+    return false;
+  }
+  *out = mix;
+  return true;
+}
 }  // namespace
 
 v1::Algorithm toProto(Algorithm algorithm) {
@@ -46,6 +73,7 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_bootstrap_samples(settings.bootstrapSamples);
   m.set_num_chains(settings.numChains);
   m.set_large_step_probability(settings.largeStepProbability);
+  toProto(settings.mutationMix, m.mutable_mutation_mix());
   return m;
 }
 
@@ -62,6 +90,7 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.bootstrapSamples = m.bootstrap_samples();
   s.numChains = m.num_chains();
   s.largeStepProbability = m.large_step_probability();
+  if (!fromProto(m.mutation_mix(), &s.mutationMix, error)) return false;
   *out = s;
   return true;
 }
@@ -82,6 +111,8 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_resume_state(spec.resumeState);
   m.set_resume_mutations(spec.resumeMutations);
   m.set_resume_flush_index(spec.resumeFlushIndex);
+  m.set_seed_path(spec.seedPath);
+  toProto(spec.mutationMix, m.mutable_mutation_mix());
   return m;
 }
 
@@ -101,6 +132,8 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   s.resumeState = m.resume_state();
   s.resumeMutations = m.resume_mutations();
   s.resumeFlushIndex = m.resume_flush_index();
+  s.seedPath = m.seed_path();
+  if (!fromProto(m.mutation_mix(), &s.mutationMix, error)) return false;
   if (s.flushInterval <= 0) {
     *error = "chain " + std::to_string(s.chainIndex) + " has flush interval " +
              std::to_string(s.flushInterval) + " (must be > 0)";

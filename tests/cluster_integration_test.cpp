@@ -143,8 +143,11 @@ int64_t workDone(const std::string& address, const std::string& job, const std::
 
 // A worker killed in the middle of a job costs its leases' time and nothing else: its chains go
 // to another worker, resume from their last accepted flush, and the image is the same.
-TEST(ClusterFailure, KilledWorkerChangesNothingButTime) {
-  ScratchDir scratch("cluster-kill");
+class ClusterFailure : public ::testing::TestWithParam<ClusterCase> {};
+
+TEST_P(ClusterFailure, KilledWorkerChangesNothingButTime) {
+  const ClusterCase& c = GetParam();
+  ScratchDir scratch("cluster-kill-" + c.algorithm);
   CoordinatorProcess coordinator(scratch.path(), /*leaseSeconds=*/1.5);
   ASSERT_TRUE(coordinator.ok()) << coordinator.log();
   auto startWorker = [&](const std::string& name) {
@@ -156,9 +159,10 @@ TEST(ClusterFailure, KilledWorkerChangesNothingButTime) {
   auto doomed = startWorker("doomed");
   ASSERT_FALSE(waitForText(scratch / "doomed.log", "registered", seconds(15)).empty());
 
-  // 64x48 at 256 spp over 64 chains: 12288 samples per chain, flushed every 4096.
-  const std::vector<std::string> settings = {
-      "--algorithm", "pt", "--width", "64", "--height", "48", "--spp", "256", "--seed", "3"};
+  // 64x48 over 64 chains of 12288 samples or mutations each, flushed every 4096.
+  std::vector<std::string> settings = {"--algorithm", c.algorithm, "--width", "64",
+                                       "--height",    "48",        "--seed",  "3"};
+  settings.insert(settings.end(), c.budget.begin(), c.budget.end());
   const std::string job = submitJob(coordinator.address(), settings, scratch.path());
   ASSERT_EQ(job.rfind("job-", 0), 0u) << "last line of stdout: " << job;
 
@@ -198,12 +202,18 @@ INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterTest,
                                            ClusterCase{"bdpt", {"--spp", "16"}},
                                            ClusterCase{"pssmlt", {"--mpp", "32"}},
                                            ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
-                                           ClusterCase{"mmlt", {"--mpp", "32"}}),
+                                           ClusterCase{"mmlt", {"--mpp", "32"}},
+                                           ClusterCase{"mlt", {"--mpp", "32"}}),
                          [](const auto& info) {
                            std::string name = info.param.algorithm;
                            std::replace(name.begin(), name.end(), '-', '_');
                            return name;
                          });
+
+INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterFailure,
+                         ::testing::Values(ClusterCase{"pt", {"--spp", "256"}},
+                                           ClusterCase{"mlt", {"--mpp", "256"}}),
+                         [](const auto& info) { return info.param.algorithm; });
 
 }  // namespace
 }  // namespace farm::testing

@@ -160,7 +160,8 @@ TEST_P(ResumeTest, ReleasedChainResumesAndTheImageIsUnchanged) {
 
 INSTANTIATE_TEST_SUITE_P(Algorithms, ResumeTest,
                          ::testing::Values(Algorithm::PathTracing, Algorithm::PSSMLT,
-                                           Algorithm::PSSMLTOverPT, Algorithm::MMLT),
+                                           Algorithm::PSSMLTOverPT, Algorithm::MMLT,
+                                           Algorithm::MLT),
                          [](const auto& info) {
                            std::string name = algorithmName(info.param);
                            std::replace(name.begin(), name.end(), '-', '_');

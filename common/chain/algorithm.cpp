@@ -15,7 +15,7 @@ struct Named {
 constexpr Named kAlgorithms[] = {
     {Algorithm::PathTracing, "pt"}, {Algorithm::Bidirectional, "bdpt"},
     {Algorithm::PSSMLT, "pssmlt"},  {Algorithm::PSSMLTOverPT, "pssmlt-pt"},
-    {Algorithm::MMLT, "mmlt"},
+    {Algorithm::MMLT, "mmlt"},      {Algorithm::MLT, "mlt"},
 };
 
 struct MixField {
@@ -50,7 +50,7 @@ bool parseAlgorithm(const std::string& name, Algorithm* out) {
 }
 
 const char* algorithmList() {
-  return "pt, bdpt, pssmlt, pssmlt-pt or mmlt";
+  return "pt, bdpt, pssmlt, pssmlt-pt, mmlt or mlt";
 }
 
 std::vector<Algorithm> allAlgorithms() {

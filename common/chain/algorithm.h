@@ -13,6 +13,7 @@ enum class Algorithm {
   PSSMLT,         // "pssmlt": primary-sample-space MLT over BDPT (Kelemen et al. 2002)
   PSSMLTOverPT,   // "pssmlt-pt": the same over path tracing
   MMLT,           // "mmlt": multiplexed MLT (Hachisuka et al. 2014)
+  MLT,            // "mlt": path-space MLT with Veach's mutations (Veach and Guibas 1997)
 };
 
 const char* algorithmName(Algorithm a);
@@ -24,7 +25,8 @@ std::vector<Algorithm> allAlgorithms();
 
 // Chains started from bootstrap seeds whose image is Z / mutations * (sum of splats).
 inline bool isMarkovChain(Algorithm a) {
-  return a == Algorithm::PSSMLT || a == Algorithm::PSSMLTOverPT || a == Algorithm::MMLT;
+  return a == Algorithm::PSSMLT || a == Algorithm::PSSMLTOverPT || a == Algorithm::MMLT ||
+         a == Algorithm::MLT;
 }
 // Chains whose state is a primary-sample vector (Kelemen et al. 2002).
 inline bool isPrimarySampleSpace(Algorithm a) {

@@ -15,6 +15,17 @@ ChainFlusher::ChainFlusher(const ChainSpec& spec, const Scene& scene,
       interval_(std::max<int64_t>(1, spec.flushInterval)),
       flushIndex_(spec.resumeFlushIndex) {}
 
+void ChainFlusher::tally(const char* kind, bool accepted) {
+  for (auto& [name, t] : tallies_) {
+    if (name == kind) {
+      ++t.proposed;
+      t.accepted += accepted;
+      return;
+    }
+  }
+  tallies_.push_back({kind, MutationTally{kind, 1, accepted ? 1 : 0}});
+}
+
 bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::string()>& state) {
   ++done_;
   ++sinceFlush_;
@@ -31,6 +42,8 @@ bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::s
   f.rays = int64_t(raysTraced - raysAtFlush_);
   f.state = state();
   f.finished = finished;
+  for (auto& [name, t] : tallies_) f.tallies.push_back(t);
+  tallies_.clear();
   raysAtFlush_ = raysTraced;
   film_.clear();
   sinceFlush_ = 0;

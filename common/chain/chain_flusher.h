@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "common/chain/chain_spec.h"
 #include "common/film/splat_buffer.h"
@@ -30,6 +32,9 @@ class ChainFlusher {
     if (cancel_ && cancel_->load(std::memory_order_relaxed)) return false;
     return spec_.budget < 0 || done_ < spec_.budget;
   }
+  // Counts a proposal of the given kind (a string with static storage) and whether the chain
+  // moved; reported with the next flush.
+  void tally(const char* kind, bool accepted);
   // Counts one mutation and flushes when one is due; raysTraced is the chain's running total
   // and state() the chain's resumable state. False when the receiver says stop.
   bool countMutation(uint64_t raysTraced, const std::function<std::string()>& state);
@@ -42,6 +47,7 @@ class ChainFlusher {
   int64_t done_, sinceFlush_ = 0, rejected_ = 0, interval_;
   uint32_t flushIndex_;
   uint64_t raysAtFlush_ = 0;
+  std::vector<std::pair<const char*, MutationTally>> tallies_;
 };
 
 }  // namespace farm

@@ -35,17 +35,26 @@ struct ChainSpec {
   uint32_t resumeFlushIndex = 0;  // flush index the resumed chain continues with
 };
 
+// How often one kind of proposal was made and accepted (PSSMLT's large and small steps, each of
+// path-space MLT's mutations).
+struct MutationTally {
+  std::string name;
+  int64_t proposed = 0;
+  int64_t accepted = 0;
+};
+
 // The splats of one flush: the change to the film since the chain's previous flush.
 struct ChainFlush {
   uint32_t chainIndex = 0;
   uint32_t flushIndex = 0;  // 0, 1, 2, ... per chain
   int64_t mutations = 0;    // mutations (or samples) this flush covers
   int width = 0, height = 0;
-  std::vector<float> splats;   // width*height*3, to be added (in double) to the chain sums
-  int64_t rejectedSplats = 0;  // NaN, Inf or negative splats dropped at the source
-  int64_t rays = 0;            // rays traced for this flush's work (for rays per second)
-  std::string state;           // chain state after this flush (resume with ChainSpec)
-  bool finished = false;       // the chain's budget is spent
+  std::vector<float> splats;           // width*height*3, to be added (in double) to the chain sums
+  int64_t rejectedSplats = 0;          // NaN, Inf or negative splats dropped at the source
+  int64_t rays = 0;                    // rays traced for this flush's work (for rays per second)
+  std::string state;                   // chain state after this flush (resume with ChainSpec)
+  std::vector<MutationTally> tallies;  // proposals and acceptances in this flush, by kind
+  bool finished = false;               // the chain's budget is spent
 };
 
 }  // namespace farm

@@ -8,6 +8,7 @@
 
 #include "common/mcmc/primary_sample_integrand.h"
 #include "common/mcmc/primary_sample_sampler.h"
+#include "common/transport/bidirectional.h"
 
 namespace farm {
 
@@ -26,6 +27,37 @@ double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, 
   double sum = evaluateContribution(*integrand, recorder, &splats, &rejected);
   if (primarySamples) *primarySamples = recorder.values();
   return sum;
+}
+
+bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t index, double u,
+                   Path* path) {
+  // The draws of evaluateCandidate(): the same stream, read in the same order.
+  Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
+  IndependentSampler sampler(&rng);
+  BidirectionalTracer tracer(scene, maxDepth);
+  std::vector<Path> paths;
+  std::vector<double> shares;
+  double total = 0;
+  tracer.visitStrategies(primarySampleFilmPoint(scene.camera(), sampler), sampler,
+                         [&](const BidirectionalTracer::StrategyPath& sp) {
+                           const double share = luminance(sp.unweighted) * sp.weight;
+                           if (!(share > 0) || !std::isfinite(share)) return;
+                           Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+                           if (!x.contribution(scene, maxDepth).carriesLight()) return;
+                           paths.push_back(std::move(x));
+                           shares.push_back(share);
+                           total += share;
+                         });
+  if (paths.empty()) return false;
+  double target = u * total, run = 0;
+  for (size_t i = 0; i < paths.size(); ++i) {
+    run += shares[i];
+    if (target < run || i + 1 == paths.size()) {
+      *path = std::move(paths[i]);
+      return true;
+    }
+  }
+  return false;
 }
 
 BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, int maxDepth,

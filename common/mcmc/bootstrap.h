@@ -9,6 +9,7 @@
 
 #include "common/chain/algorithm.h"
 #include "common/scene/scene.h"
+#include "common/transport/path.h"
 
 namespace farm {
 
@@ -23,6 +24,13 @@ struct BootstrapCandidates {
 // total luminance and, when asked, the primary-sample vector it used.
 double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
                          int64_t index, std::vector<float>* primarySamples = nullptr);
+
+// Path-space seeds (mlt): candidate `index` rebuilt as the paths its BDPT sample's strategies
+// built, one chosen in proportion to the luminance it carries (u uniform in [0, 1)), among
+// those whose path carries light. Resampling candidates by I and then a strategy by its share
+// of I gives paths distributed as the luminance of f (Veach 1997, 11.3). False when none does.
+bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t index, double u,
+                   Path* path);
 
 // Generates `count` candidates in parallel. `progress` receives the fraction done and may return
 // false to cancel (then the result is empty).

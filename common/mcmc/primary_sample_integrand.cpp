@@ -92,6 +92,7 @@ std::unique_ptr<PrimarySampleIntegrand> makePrimarySampleIntegrand(Algorithm alg
                                                                    int maxDepth) {
   switch (algorithm) {
     case Algorithm::PSSMLT:
+    case Algorithm::MLT:  // path-space MLT bootstraps from BDPT
       return std::make_unique<BidirectionalIntegrand>(scene, maxDepth);
     case Algorithm::PSSMLTOverPT:
       return std::make_unique<PathTracingIntegrand>(scene, maxDepth);

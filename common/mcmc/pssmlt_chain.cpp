@@ -89,12 +89,15 @@ void runPssmltChain(const Scene& scene, const PrimarySampleIntegrand& integrand,
       float w = float((1 - a) / currentI);
       for (const Splat& s : current) film.add(s.film, s.value, w);
     }
+    const bool largeStep = sampler.isLargeStep();
     if (a >= 1 || sampler.rng().nextDouble() < a) {
       std::swap(current, proposed);
       currentI = proposedI;
       sampler.accept();
+      flusher.tally(largeStep ? "large step" : "small step", true);
     } else {
       sampler.reject();
+      flusher.tally(largeStep ? "large step" : "small step", false);
     }
     if (!flusher.countMutation(integrand.rays(), [&] { return sampler.serialize(); })) return;
   }

@@ -130,6 +130,9 @@ TEST(Reference, CornellBoxPssmltOverPathTracing) {
 TEST(Reference, CornellBoxMultiplexed) {
   expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::MMLT, 16});
 }
+TEST(Reference, CornellBoxPathSpace) {
+  expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::MLT, 16});
+}
 TEST(Reference, VeachMisPathTracing) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PathTracing, 16});
 }
@@ -144,6 +147,9 @@ TEST(Reference, VeachMisPssmltOverPathTracing) {
 }
 TEST(Reference, VeachMisMultiplexed) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::MMLT, 16});
+}
+TEST(Reference, VeachMisPathSpace) {
+  expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::MLT, 16});
 }
 
 }  // namespace

@@ -9,11 +9,13 @@
 #include "common/chain/chain_flusher.h"
 #include "common/film/splat_buffer.h"
 #include "common/mcmc/bootstrap.h"
+#include "common/mcmc/mlt_chain.h"
 #include "common/mcmc/pssmlt_chain.h"
 #include "common/scene/film_override.h"
 #include "common/scene/loaders/mitsuba_loader.h"
 #include "common/scene/scene.h"
 #include "common/transport/bidirectional.h"
+#include "common/transport/path.h"
 #include "common/transport/path_tracer.h"
 
 namespace farm {
@@ -22,6 +24,7 @@ namespace {
 
 constexpr int kDefaultChains = 64;
 constexpr uint64_t kSampleDomain = 0x5a3b;
+constexpr uint64_t kPathSeedDomain = 0x9a7b;
 // Time-budgeted sample chains draw from disjoint index ranges this far apart.
 constexpr int64_t kUnboundedChainStride = int64_t(1) << 40;
 
@@ -132,10 +135,24 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   result.nonZeroCandidates = c.nonZero;
   const int chains = settings_.numChains > 0 ? settings_.numChains : kDefaultChains;
   std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
-  for (int64_t i : picks) {
+  const int maxDepth = resolvedMaxDepth(settings_, *scene_);
+  for (size_t c = 0; c < picks.size(); ++c) {
+    const int64_t i = picks[c];
+    if (settings_.algorithm == Algorithm::MLT) {
+      // A path-space seed: one of the candidate's strategies, by its share of the luminance.
+      Rng pick(settings_.seed, streamId(kPathSeedDomain, c));
+      Path path;
+      if (!candidatePath(*scene_, maxDepth, settings_.seed, i, pick.nextDouble(), &path))
+        throw std::runtime_error("bootstrap candidate " + std::to_string(i) +
+                                 " carries light but builds no path: this host computes "
+                                 "differently from itself");
+      result.seedPaths.push_back(path.serialize());
+      result.seedContributions.push_back(
+          std::exp(path.contribution(*scene_, maxDepth).logLuminance));
+      continue;
+    }
     std::vector<float> u;
-    double I = evaluateCandidate(*scene_, settings_.algorithm, resolvedMaxDepth(settings_, *scene_),
-                                 settings_.seed, i, &u);
+    double I = evaluateCandidate(*scene_, settings_.algorithm, maxDepth, settings_.seed, i, &u);
     result.seedSamples.push_back(std::move(u));
     result.seedContributions.push_back(I);
   }
@@ -145,7 +162,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
 
 std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) const {
   const bool mcmc = isMarkovChain(settings_.algorithm);
-  const int chains = mcmc ? int(bootstrap.seedSamples.size())
+  const int chains = mcmc ? int(bootstrap.seedContributions.size())
                           : (settings_.numChains > 0 ? settings_.numChains : kDefaultChains);
   if (mcmc && chains == 0) throw std::runtime_error("the bootstrap produced no seed paths");
   const int64_t planned = plannedWork();
@@ -172,7 +189,12 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
       first += s.budget;
     }
     if (mcmc) {
-      s.seedSample = bootstrap.seedSamples[c];
+      if (settings_.algorithm == Algorithm::MLT) {
+        s.seedPath = bootstrap.seedPaths[c];
+        s.mutationMix = settings_.mutationMix;
+      } else {
+        s.seedSample = bootstrap.seedSamples[c];
+      }
       s.seedContribution = bootstrap.seedContributions[c];
     }
     s.flushInterval = s.budget > 0 ? std::min(interval, s.budget) : interval;
@@ -189,7 +211,9 @@ double RenderJob::imageScale(const BootstrapResult& bootstrap, int64_t workDone)
 
 void RenderJob::runChain(const ChainSpec& spec, const std::function<bool(ChainFlush&&)>& onFlush,
                          const std::atomic<bool>* cancel) const {
-  if (isMarkovChain(spec.algorithm))
+  if (spec.algorithm == Algorithm::MLT)
+    runMltChain(*scene_, spec, onFlush, cancel);
+  else if (isPrimarySampleSpace(spec.algorithm))
     runPssmltChain(*scene_, spec, onFlush, cancel);
   else
     runSampleChain(*scene_, spec, onFlush, cancel);
@@ -240,7 +264,10 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
     m["farm:normalizationStdError"] = formatDouble(bootstrap.normalizationStdError);
     m["farm:bootstrapCandidates"] = std::to_string(bootstrap.candidates);
     m["farm:bootstrapSeconds"] = formatDouble(bootstrap.seconds);
-    m["farm:largeStepProbability"] = formatDouble(settings_.largeStepProbability);
+    if (settings_.algorithm == Algorithm::MLT)
+      m["farm:mutationMix"] = formatMutationMix(settings_.mutationMix);
+    else
+      m["farm:largeStepProbability"] = formatDouble(settings_.largeStepProbability);
   } else {
     m["farm:samples"] = std::to_string(workDone);
     m["farm:samplesPerPixel"] = formatDouble(workDone / pixels);

@@ -26,8 +26,10 @@ struct BootstrapResult {
   int64_t candidates = 0;         // candidate paths generated
   int64_t nonZeroCandidates = 0;  // of them, those carrying light
   double seconds = 0;
-  // Seeds resampled in proportion to weight, one per chain: primary-sample vector and I(u).
+  // Seeds resampled in proportion to weight, one per chain: the primary-sample vector (or, for
+  // mlt, the serialized path) and its scalar contribution.
   std::vector<std::vector<float>> seedSamples;
+  std::vector<std::string> seedPaths;
   std::vector<double> seedContributions;
 };
 

@@ -29,6 +29,8 @@ std::string RenderSettings::validate() const {
     err << "number of chains must be in 0.." << (1 << 20) << ", not " << numChains;
   } else if (!(largeStepProbability > 0 && largeStepProbability <= 1)) {
     err << "large-step probability must be in (0, 1], not " << largeStepProbability;
+  } else if (std::string mix = validateMutationMix(mutationMix); !mix.empty()) {
+    err << mix;
   }
   return err.str();
 }

@@ -19,6 +19,7 @@ struct RenderSettings {
   int64_t bootstrapSamples = 0;       // candidate paths; 0: a default from the film size
   int numChains = 0;                  // independent chains (work units); 0: default
   float largeStepProbability = 0.3f;  // Kelemen et al. 2002, section 4
+  MutationMix mutationMix;            // mlt: how often each of Veach's mutations is proposed
 
   // Empty when the settings are usable, otherwise what is wrong (for the user, one line).
   std::string validate() const;

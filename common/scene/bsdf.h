@@ -35,9 +35,10 @@ class Bsdf {
   // The direction the reflection (or refraction) lobe takes wo to; false where it does not
   // exist (refraction beyond the critical angle) or the BSDF has no Dirac lobes.
   bool specularDirection(const Vec3f& wo, bool reflection, Vec3f* wi) const;
-  // When wi is (to rounding) where a Dirac lobe takes wo: which lobe, the probability with which
-  // sample() chooses it, and its value f |cos wi| / delta for `mode` (the Fresnel term, times the
-  // radiance compression of refraction). False otherwise.
+  // The Dirac lobe that joins wo and wi, told by their sides (reflection when on the same side):
+  // which lobe, the probability with which sample() chooses it, and its value f |cos wi| / delta
+  // for `mode` (the Fresnel term, times the radiance compression of refraction), both from wo.
+  // False when there is no such lobe (refraction beyond the critical angle, no Dirac lobes).
   bool specularLobe(const Vec3f& wo, const Vec3f& wi, TransportMode mode, bool* reflection,
                     float* probability, Spectrum* value) const;
   // For directions a and b that a Dirac lobe joins, the ratio of solid angles d(omega_a) /

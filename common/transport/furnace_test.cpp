@@ -109,6 +109,10 @@ TEST(Furnace, Multiplexed) {
   expectFurnace(Algorithm::MMLT, -1);
   expectFurnace(Algorithm::MMLT, 3);
 }
+TEST(Furnace, PathSpace) {
+  expectFurnace(Algorithm::MLT, -1);
+  expectFurnace(Algorithm::MLT, 3);
+}
 
 // A floor (a large rectangle at y = 0, normal +y) lit by a sphere of radius r at height h,
 // seen from above by a narrow camera, direct light only (maxDepth 2).
@@ -218,6 +222,9 @@ TEST(AnalyticIrradiance, PssmltOverPathTracing) {
 }
 TEST(AnalyticIrradiance, Multiplexed) {
   expectIrradiance(Algorithm::MMLT);
+}
+TEST(AnalyticIrradiance, PathSpace) {
+  expectIrradiance(Algorithm::MLT);
 }
 
 }  // namespace

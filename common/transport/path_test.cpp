@@ -7,8 +7,8 @@
 //
 // BDPT starts each ray a small distance off the surface (Scene::spawnRay), so the edge between two
 // of its vertices points up to about 1e-4 radians away from the direction it sampled. Diffuse and
-// specular vertices do not notice (the Dirac lobes are recognized to 0.014 radians); a glossy
-// lobe of roughness 0.01 changes by several per cent over that angle. So paths through rough
+// specular vertices do not notice (a Dirac lobe is told by the sides of its two directions); a
+// glossy lobe of roughness 0.01 changes by several per cent over that angle. So paths through rough
 // conductors are held to their median and 90th percentile, all others to every single value.
 #include "common/transport/path.h"
 

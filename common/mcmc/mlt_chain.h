@@ -1,0 +1,41 @@
+#pragma once
+// One chain of path-space MLT (Veach and Guibas 1997): its state is a Path, and each step picks
+// one of Veach's mutations, with probability proportional to its weight among those that apply
+// to the current path, and accepts the proposal with
+//   a = min(1, f(y) T(x | y) P(mutation | y) / (f(x) T(y | x) P(mutation | x)))
+// evaluated in logarithms (f(y) / f(x) from each path's log-luminance), so that neither long
+// paths nor lights of 1e9 overflow or underflow it. Expected-value splatting as in PSSMLT:
+// y's colour of unit luminance with weight a, x's with 1 - a; the image is Z / M times the sum.
+#include <atomic>
+#include <functional>
+
+#include "common/chain/chain_spec.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+
+// Runs the chain of spec (seedPath, mutationMix, maxDepth) to its budget, flushing through
+// onFlush; returns at once when *cancel becomes true. Throws std::runtime_error for a seed or
+// resume state that is not a path of this scene, or a seed that carries no light.
+void runMltChain(const Scene& scene, const ChainSpec& spec,
+                 const std::function<bool(ChainFlush&&)>& onFlush,
+                 const std::atomic<bool>* cancel = nullptr);
+
+class Mutation;
+struct MutationRecord;
+struct PathContribution;
+class Path;
+
+// log of the Metropolis-Hastings ratio of the move x -> y that `mutation` proposed with `record`,
+// the mutation having been picked with probability selectX at x and selectY at y:
+//   log f(y) - log f(x) + log T(x | y) - log T(y | x) + log selectY - log selectX,
+// T(x | y) evaluated from y's vertices by the reverse move. -infinity when the move cannot be
+// reversed; the acceptance is min(1, exp of it).
+double logAcceptanceRatio(const Mutation& mutation, const Path& x, const PathContribution& fx,
+                          const Path& y, const PathContribution& fy, const MutationRecord& record,
+                          double selectX, double selectY);
+
+// The current path of a path-space chain's state (what its flush carries), for tests and tools.
+bool mltChainPath(const std::string& state, const Scene& scene, std::string* pathBytes);
+
+}  // namespace farm

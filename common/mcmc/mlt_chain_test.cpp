@@ -1,0 +1,408 @@
+// Path-space MLT is exact, mutation by mutation:
+//  - detailed balance: for thousands of paths of the shared scenes and a glass scene, every
+//    proposal y of every mutation satisfies f(x) T(y|x) a(y|x) = f(y) T(x|y) a(x|y) to rounding,
+//    with T(x|y) evaluated from y by the reverse move (and finite wherever y carries light);
+//  - stationarity: each mutation alone, run from seeds drawn from the target (the bootstrap's
+//    resampled BDPT paths), deposits its splats in the target's proportions: per block of the
+//    image, the mean share over many independent chains agrees with the converged reference
+//    (the Cornell box) or with a long BDPT render (the glass scene) within a Bonferroni bound at
+//    level 1e-4, the standard errors taken from the spread of the chains and of the BDPT samples;
+//  - a chain resumed from a flush's state continues bit for bit.
+#include "common/mcmc/mlt_chain.h"
+
+#include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "common/film/image.h"
+#include "common/mcmc/chain_statistics.h"
+#include "common/mcmc/mutations/bidirectional_mutation.h"
+#include "common/mcmc/mutations/caustic_perturbation.h"
+#include "common/mcmc/mutations/lens_perturbation.h"
+#include "common/mcmc/mutations/lens_subpath_mutation.h"
+#include "common/mcmc/mutations/multi_chain_perturbation.h"
+#include "common/mcmc/primary_sample_integrand.h"
+#include "common/mcmc/test_scenes.h"
+#include "common/render/render_job.h"
+#include "common/scene/scene.h"
+#include "common/transport/bidirectional.h"
+#include "common/transport/path_tracer.h"
+
+namespace farm {
+namespace {
+
+const std::string kShared = FARM_SHARED_DIR;
+constexpr double kAlpha = 1e-4;
+constexpr int kFilm = 32, kBlocks = 4;
+
+std::shared_ptr<Scene> loadSmall(const std::string& file) {
+  RenderSettings settings;
+  settings.width = settings.height = kFilm;
+  auto loaded = loadScene(file, settings);
+  SceneDescription desc = loaded->description();
+  desc.camera.filter = FilterType::Box;  // pixels sum into blocks exactly
+  return std::make_shared<Scene>(desc);
+}
+
+std::string cornellBox() {
+  return kShared + "/scenes/cornell-box/scene.xml";
+}
+
+int maxDepthOf(const Scene& scene) {
+  return scene.maxDepth() == 0 ? -1 : scene.maxDepth();
+}
+
+// Seeds from the production bootstrap: BDPT candidates resampled by luminance, then one of each
+// candidate's strategy paths by its share.
+BootstrapResult bootstrapSeeds(const std::shared_ptr<Scene>& scene, int chains, uint64_t seed) {
+  RenderSettings settings;
+  settings.algorithm = Algorithm::MLT;
+  settings.numChains = chains;
+  settings.bootstrapSamples = int64_t(1) << 18;
+  settings.seed = seed;
+  RenderJob job(scene, settings, "seeds");
+  return job.bootstrap();
+}
+
+struct Mutations {
+  explicit Mutations(const MutationContext& c)
+      : bidirectional(c), lensSubpath(c), lens(c), caustic(c), multiChain(c) {}
+  const Mutation* get(MutationType t) const {
+    const Mutation* all[] = {&bidirectional, &lensSubpath, &lens, &caustic, &multiChain};
+    return all[int(t)];
+  }
+  BidirectionalMutation bidirectional;
+  LensSubpathMutation lensSubpath;
+  LensPerturbation lens;
+  CausticPerturbation caustic;
+  MultiChainPerturbation multiChain;
+};
+
+// --- Detailed balance ------------------------------------------------------------------------
+
+void expectDetailedBalance(const std::string& file, int minimumChecked) {
+  auto scene = loadSmall(file);
+  const int maxDepth = maxDepthOf(*scene);
+  BootstrapResult seeds = bootstrapSeeds(scene, 2000, 3);
+  MutationContext context{*scene, maxDepth};
+  Mutations mutations(context);
+  Rng rng(21, 21);
+  for (int t = 0; t < kMutationTypes; ++t) {
+    const Mutation& mutation = *mutations.get(MutationType(t));
+    int checked = 0, irreversible = 0;
+    for (const std::string& bytes : seeds.seedPaths) {
+      Path x;
+      ASSERT_TRUE(x.deserialize(bytes, *scene));
+      PathContribution fx = x.contribution(*scene, maxDepth);
+      ASSERT_TRUE(fx.carriesLight());
+      if (!mutation.appliesTo(x)) continue;
+      for (int attempt = 0; attempt < 4; ++attempt) {
+        Path y;
+        MutationRecord record;
+        if (!mutation.propose(x, rng, &y, &record)) continue;
+        PathContribution fy = y.contribution(*scene, maxDepth);
+        if (!fy.carriesLight()) continue;
+        ASSERT_TRUE(mutation.appliesTo(y)) << mutationName(MutationType(t));
+        const double logTyx = mutation.logDensity(x, y, record);
+        const double logTxy = mutation.logDensity(y, x, record.reverse());
+        ASSERT_TRUE(std::isfinite(logTyx)) << mutationName(MutationType(t)) << ": T(y|x)";
+        if (!std::isfinite(logTxy)) {
+          // A move that cannot be undone (the bidirectional mutation deleted a specular run
+          // that no connection can regrow; the caustic perturbation's angle lies outside the
+          // range y's geometry allows) must not be accepted: both sides of the balance are 0.
+          EXPECT_EQ(logAcceptanceRatio(mutation, x, fx, y, fy, record, 1, 1), -INFINITY);
+          ++irreversible;
+          continue;
+        }
+        const double logAxy =
+            std::min(0.0, logAcceptanceRatio(mutation, x, fx, y, fy, record, 1, 1));
+        const double logAyx =
+            std::min(0.0, logAcceptanceRatio(mutation, y, fy, x, fx, record.reverse(), 1, 1));
+        const double forward = fx.logLuminance + logTyx + logAxy;
+        const double backward = fy.logLuminance + logTxy + logAyx;
+        EXPECT_NEAR(forward, backward, 1e-9 * (1 + std::fabs(forward)))
+            << mutationName(MutationType(t));
+        ++checked;
+      }
+    }
+    std::printf("%s, %s: %d proposals checked, %d not reversible\n",
+                std::filesystem::path(file).filename().c_str(), mutationName(MutationType(t)),
+                checked, irreversible);
+    EXPECT_LE(irreversible, checked / 10) << mutationName(MutationType(t));
+    if (t != int(MutationType::MultiChainPerturbation) || file != cornellBox()) {
+      EXPECT_GE(checked, minimumChecked) << mutationName(MutationType(t));
+    }
+  }
+}
+
+TEST(MltChain, DetailedBalanceCornellBox) {
+  expectDetailedBalance(cornellBox(), 1000);
+}
+TEST(MltChain, DetailedBalanceGlassBall) {
+  expectDetailedBalance(glassBallScene(), 100);
+}
+
+// --- Stationarity, one mutation at a time ---------------------------------------------------
+//
+// A kernel keeps its target: chains started from independent draws of it deposit, on average,
+// the target's share of luminance in every block of the image, however little they mix (the
+// perturbations never move the light end of a path). The draws come from importance resampling
+// of BDPT samples (a sample by its luminance, then one of its strategies' paths by its share),
+// the measure the bootstrap seeds from, which converges to the target; its own block shares are
+// a ratio estimate from those samples, whose standard error (delta method) joins the chains'.
+
+int blockOf(const Vec2f& film) {
+  int x = std::min(int(film.x) * kBlocks / kFilm, kBlocks - 1);
+  int y = std::min(int(film.y) * kBlocks / kFilm, kBlocks - 1);
+  return x + kBlocks * y;
+}
+
+struct Shares {
+  std::vector<double> mean, stdError;
+};
+
+// BDPT samples: the block shares of their splats' luminance with standard errors, and each
+// sample's total luminance, from which seeds are drawn.
+struct ResampledTarget {
+  Shares shares;
+  std::vector<double> cumulative;  // running sum of the samples' totals
+  uint64_t seed = 77;
+};
+
+ResampledTarget sampleTarget(const Scene& scene, int samples) {
+  ResampledTarget target;
+  const int maxDepth = maxDepthOf(scene);
+  const int blocks = kBlocks * kBlocks;
+  std::vector<std::vector<double>> perSample(samples, std::vector<double>(blocks, 0.0));
+  tbb::parallel_for(0, samples, [&](int i) {
+    Rng rng(target.seed, uint64_t(i));
+    IndependentSampler sampler(&rng);
+    BidirectionalTracer tracer(scene, maxDepth);
+    std::vector<Splat> splats;
+    tracer.sample(primarySampleFilmPoint(scene.camera(), sampler), sampler, &splats);
+    for (const Splat& s : splats) perSample[i][size_t(blockOf(s.film))] += luminance(s.value);
+  });
+  Shares& s = target.shares;
+  s.mean.assign(blocks, 0.0);
+  s.stdError.assign(blocks, 0.0);
+  std::vector<double> totals(samples, 0.0);
+  double total = 0;
+  for (int i = 0; i < samples; ++i) {
+    for (int b = 0; b < blocks; ++b) s.mean[b] += perSample[i][b], totals[i] += perSample[i][b];
+    total += totals[i];
+    target.cumulative.push_back(total);
+  }
+  for (double& m : s.mean) m /= total;
+  // share_b = m_b / m; its variance is var(X_b - share_b X) / (N m^2).
+  const double meanTotal = total / samples;
+  for (int b = 0; b < blocks; ++b) {
+    double sum = 0, sumSq = 0;
+    for (int i = 0; i < samples; ++i) {
+      double d = perSample[i][b] - s.mean[b] * totals[i];
+      sum += d;
+      sumSq += d * d;
+    }
+    double var = (sumSq - sum * sum / samples) / (samples - 1);
+    s.stdError[b] = std::sqrt(var / samples) / meanTotal;
+  }
+  return target;
+}
+
+// An independent draw from the resampled measure: a sample by its total, rebuilt from its
+// stream, then one of its strategies' paths by its share.
+Path drawSeed(const Scene& scene, const ResampledTarget& target, Rng& rng) {
+  const int maxDepth = maxDepthOf(scene);
+  for (;;) {
+    const double u = rng.nextDouble() * target.cumulative.back();
+    const int i = int(std::upper_bound(target.cumulative.begin(), target.cumulative.end(), u) -
+                      target.cumulative.begin());
+    Rng sampleRng(target.seed, uint64_t(std::min(i, int(target.cumulative.size()) - 1)));
+    IndependentSampler sampler(&sampleRng);
+    BidirectionalTracer tracer(scene, maxDepth);
+    std::vector<Path> paths;
+    std::vector<double> run;
+    tracer.visitStrategies(
+        primarySampleFilmPoint(scene.camera(), sampler), sampler,
+        [&](const BidirectionalTracer::StrategyPath& sp) {
+          Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+          if (!x.contribution(scene, maxDepth).carriesLight()) return;
+          paths.push_back(std::move(x));
+          run.push_back((run.empty() ? 0 : run.back()) + luminance(sp.unweighted) * sp.weight);
+        });
+    if (paths.empty()) continue;
+    const double v = rng.nextDouble() * run.back();
+    const size_t k = size_t(std::upper_bound(run.begin(), run.end(), v) - run.begin());
+    return paths[std::min(k, paths.size() - 1)];
+  }
+}
+
+Shares referenceShares() {
+  Image ref;
+  std::string error;
+  if (!readExr(kShared + "/references/cornell-box-256.exr", &ref, &error))
+    throw std::runtime_error(error);
+  Shares s;
+  s.mean.assign(kBlocks * kBlocks, 0.0);
+  s.stdError.assign(kBlocks * kBlocks, 0.0);  // 4096 samples per pixel: negligible here
+  double total = 0;
+  for (int y = 0; y < ref.height; ++y) {
+    for (int x = 0; x < ref.width; ++x) {
+      double v = luminance(ref.at(x, y));
+      s.mean[size_t(x * kBlocks / ref.width + kBlocks * (y * kBlocks / ref.height))] += v;
+      total += v;
+    }
+  }
+  for (double& v : s.mean) v /= total;
+  return s;
+}
+
+// Runs `chains` production chains of one mutation alone, each from an independent seed, and
+// tests their mean block shares against `expected`, whose standard error is added to the
+// chains' and the seeds' measure's.
+void expectStationary(const Scene& scene, const ResampledTarget& target, const Shares& expected,
+                      MutationType type, int chains, int64_t mutations) {
+  const int blocks = kBlocks * kBlocks;
+  std::vector<std::string> seeds;
+  Rng seedRng(123, uint64_t(type));
+  for (int c = 0; c < chains; ++c) seeds.push_back(drawSeed(scene, target, seedRng).serialize());
+  std::vector<std::vector<double>> shares(chains);
+  std::vector<int64_t> proposed(chains, 0), accepted(chains, 0);
+  tbb::parallel_for(0, chains, [&](int c) {
+    ChainSpec spec;
+    spec.algorithm = Algorithm::MLT;
+    spec.chainIndex = uint32_t(c);
+    spec.seed = 5;
+    spec.maxDepth = maxDepthOf(scene);
+    spec.budget = mutations;
+    spec.flushInterval = mutations;
+    spec.seedPath = seeds[c];
+    MutationMix only{0, 0, 0, 0, 0};
+    double* weights[] = {&only.bidirectional, &only.lensSubpath, &only.lensPerturbation,
+                         &only.causticPerturbation, &only.multiChainPerturbation};
+    *weights[int(type)] = 1;
+    spec.mutationMix = only;
+    std::vector<double> block(blocks, 0.0);
+    runMltChain(scene, spec, [&](ChainFlush&& f) {
+      for (int y = 0; y < kFilm; ++y) {
+        for (int x = 0; x < kFilm; ++x) {
+          size_t i = size_t(y * kFilm + x) * 3;
+          block[size_t(blockOf(Vec2f(x + 0.5f, y + 0.5f)))] +=
+              luminance(Spectrum(f.splats[i], f.splats[i + 1], f.splats[i + 2]));
+        }
+      }
+      for (const MutationTally& t : f.tallies) {
+        proposed[c] += t.proposed;
+        accepted[c] += t.accepted;
+      }
+      return true;
+    });
+    double total = 0;
+    for (double v : block) total += v;
+    for (double& v : block) v /= total;
+    shares[c] = block;
+  });
+  const double threshold = normalQuantile(1 - kAlpha / (2 * blocks));
+  double worst = 0;
+  int worstBlock = -1;
+  for (int b = 0; b < blocks; ++b) {
+    double sum = 0, sumSq = 0;
+    for (const auto& s : shares) sum += s[b], sumSq += s[b] * s[b];
+    const double mean = sum / chains;
+    const double chainVar = std::max(0.0, (sumSq - chains * mean * mean) / (chains - 1)) / chains;
+    const double se = std::sqrt(chainVar + std::pow(target.shares.stdError[b], 2) +
+                                std::pow(expected.stdError[b], 2));
+    const double z = std::fabs(mean - expected.mean[b]) / se;
+    if (z > worst) worst = z, worstBlock = b;
+  }
+  if (getenv("SHARES_DEBUG")) {
+    for (int b = 0; b < blocks; ++b) {
+      double sum = 0;
+      for (const auto& sh : shares) sum += sh[b];
+      std::printf("  block %2d: chains %.5f expected %.5f (se %.5f)\n", b, sum / chains,
+                  expected.mean[b], target.shares.stdError[b]);
+    }
+  }
+  int64_t p = 0, a = 0;
+  for (int c = 0; c < chains; ++c) p += proposed[c], a += accepted[c];
+  EXPECT_LE(worst, threshold) << mutationName(type) << ": block " << worstBlock << " is " << worst
+                              << " standard errors off";
+  EXPECT_GT(p, chains * mutations / 20) << mutationName(type) << " hardly ever applies";
+  EXPECT_GT(a, p / 100) << mutationName(type) << " hardly ever moves the chain";
+  std::printf(
+      "%s: worst block %d at %.2f standard errors (bound %.2f); %lld proposals, %.1f%% "
+      "accepted\n",
+      mutationName(type), worstBlock, worst, threshold, (long long)p, p > 0 ? 100.0 * a / p : 0.0);
+}
+
+TEST(MltChain, StationaryInTheCornellBox) {
+  auto scene = loadSmall(cornellBox());
+  const ResampledTarget target = sampleTarget(*scene, 1 << 18);
+  const Shares reference = referenceShares();
+  for (MutationType t : {MutationType::Bidirectional, MutationType::LensSubpath,
+                         MutationType::LensPerturbation, MutationType::CausticPerturbation})
+    expectStationary(*scene, target, reference, t, 160, 3000);
+}
+
+TEST(MltChain, StationaryAroundTheGlassBall) {
+  auto scene = loadSmall(glassBallScene());
+  const ResampledTarget target = sampleTarget(*scene, 1 << 19);
+  Shares none;
+  none.mean = target.shares.mean;  // the reference is the same BDPT estimate (its error counted)
+  none.stdError.assign(none.mean.size(), 0.0);
+  for (MutationType t :
+       {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::LensPerturbation,
+        MutationType::CausticPerturbation, MutationType::MultiChainPerturbation})
+    expectStationary(*scene, target, none, t, 480, 4000);
+}
+
+// --- Resume ----------------------------------------------------------------------------------
+
+TEST(MltChain, ResumedChainContinuesExactly) {
+  auto scene = loadSmall(glassBallScene());
+  BootstrapResult seeds = bootstrapSeeds(scene, 4, 9);
+  ChainSpec spec;
+  spec.algorithm = Algorithm::MLT;
+  spec.chainIndex = 2;
+  spec.seed = 9;
+  spec.maxDepth = maxDepthOf(*scene);
+  spec.budget = 3000;
+  spec.flushInterval = 1000;
+  spec.seedPath = seeds.seedPaths[2];
+  std::vector<ChainFlush> whole;
+  runMltChain(*scene, spec, [&](ChainFlush&& f) {
+    whole.push_back(std::move(f));
+    return true;
+  });
+  ASSERT_EQ(whole.size(), 3u);
+  ChainSpec resumed = spec;
+  resumed.resumeState = whole[0].state;
+  resumed.resumeMutations = 1000;
+  resumed.resumeFlushIndex = 1;
+  std::vector<ChainFlush> rest;
+  runMltChain(*scene, resumed, [&](ChainFlush&& f) {
+    rest.push_back(std::move(f));
+    return true;
+  });
+  ASSERT_EQ(rest.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(rest[size_t(k)].splats, whole[size_t(k + 1)].splats) << "flush " << k + 1;
+    EXPECT_EQ(rest[size_t(k)].state, whole[size_t(k + 1)].state);
+  }
+  ChainSpec corrupt = spec;
+  corrupt.resumeState = "garbage";
+  EXPECT_THROW(runMltChain(*scene, corrupt, [](ChainFlush&&) { return true; }), std::runtime_error);
+  ChainSpec noSeed = spec;
+  noSeed.seedPath.clear();
+  EXPECT_THROW(runMltChain(*scene, noSeed, [](ChainFlush&&) { return true; }), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace farm

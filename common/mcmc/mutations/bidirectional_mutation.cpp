@@ -1,0 +1,212 @@
+#include "common/mcmc/mutations/bidirectional_mutation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "common/sampling/warp.h"
+#include "common/scene/scene.h"
+#include "common/transport/path_tracer.h"
+
+namespace farm {
+
+namespace {
+
+// The range of added vertex counts for a path of n vertices losing nd of them.
+bool addedRange(int n, int nd, int maxDepth, int* lo, int* hi) {
+  const int kept = n - nd;
+  *lo = std::max({nd == 0 ? 1 : 0, nd - BidirectionalMutation::kMaxLengthChange, 2 - kept});
+  *hi = nd + BidirectionalMutation::kMaxLengthChange;
+  if (maxDepth >= 0) *hi = std::min(*hi, maxDepth + 1 - kept);
+  *hi = std::min(*hi, kUnboundedDepth - kept);
+  return *lo <= *hi;
+}
+
+// Weights of nd = 0 .. n - 1 (zero where no added count is possible) and their total.
+double removedWeights(int n, int maxDepth, std::vector<double>* weights) {
+  weights->assign(size_t(n), 0.0);
+  double total = 0;
+  for (int nd = 0; nd < n; ++nd) {
+    int lo, hi;
+    if (addedRange(n, nd, maxDepth, &lo, &hi))
+      total += (*weights)[size_t(nd)] = std::ldexp(1.0, -nd);
+  }
+  return total;
+}
+
+double addedWeight(int nd, int na) {
+  return std::ldexp(1.0, -std::abs(na - nd));
+}
+
+double addedTotal(int n, int nd, int maxDepth) {
+  int lo, hi;
+  if (!addedRange(n, nd, maxDepth, &lo, &hi)) return 0;
+  double total = 0;
+  for (int na = lo; na <= hi; ++na) total += addedWeight(nd, na);
+  return total;
+}
+
+// log of the probability of the discrete choices (nd, start, na, split) for a path of n vertices.
+double logChoiceProbability(int n, int nd, int na, int maxDepth) {
+  std::vector<double> weights;
+  const double total = removedWeights(n, maxDepth, &weights);
+  if (nd < 0 || nd >= n || !(weights[size_t(nd)] > 0)) return -INFINITY;
+  int lo, hi;
+  addedRange(n, nd, maxDepth, &lo, &hi);
+  if (na < lo || na > hi) return -INFINITY;
+  return std::log(weights[size_t(nd)] / total) - std::log(double(n - nd)) +
+         std::log(addedWeight(nd, na) / addedTotal(n, nd, maxDepth)) - std::log(double(na + 1));
+}
+
+int sampleDiscrete(const std::vector<double>& weights, double total, Rng& rng) {
+  double u = rng.nextDouble() * total, run = 0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    run += weights[i];
+    if (u < run && weights[i] > 0) return int(i);
+  }
+  for (size_t i = weights.size(); i-- > 0;) {
+    if (weights[i] > 0) return int(i);
+  }
+  return 0;
+}
+
+// One step of a random walk: the vertex after `at` (which was reached from `from`), its
+// direction sampled by the BSDF at `at` in the given transport mode.
+bool scatterStep(const MutationContext& context, const PathVertex& at, const PathVertex& from,
+                 TransportMode mode, Rng& rng, PathVertex* next) {
+  const Scene& scene = context.scene;
+  const Bsdf& bsdf = scene.bsdfOf(at.shape);
+  Vec3f woWorld = normalize(from.p - at.p);
+  if (bsdf.isBlack() || !sidesAgree(woWorld, at.n, at.ns)) return false;
+  Frame frame(at.ns);
+  float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+  BsdfSample bs;
+  if (!bsdf.sample(frame.toLocal(woWorld), u, mode, &bs)) return false;
+  Vec3f w = normalize(frame.toWorld(bs.wi));
+  if (!sidesAgree(w, at.n, at.ns)) return false;
+  return traceVertex(context, at, w, next);
+}
+
+}  // namespace
+
+bool BidirectionalMutation::appliesTo(const Path& x) const {
+  return x.vertices.size() >= 2;
+}
+
+bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
+                                    MutationRecord* record) const {
+  const Scene& scene = context_.scene;
+  const int n = int(x.vertices.size());
+  std::vector<double> weights;
+  const double total = removedWeights(n, context_.maxDepth, &weights);
+  if (!(total > 0)) return false;
+  const int nd = sampleDiscrete(weights, total, rng);
+  const int L = std::min(int(rng.nextDouble() * (n - nd)), n - nd - 1);
+  const int E = n - L - nd;
+  int lo, hi;
+  addedRange(n, nd, context_.maxDepth, &lo, &hi);
+  std::vector<double> added(size_t(hi - lo + 1));
+  double addedSum = 0;
+  for (int na = lo; na <= hi; ++na) addedSum += added[size_t(na - lo)] = addedWeight(nd, na);
+  const int na = lo + sampleDiscrete(added, addedSum, rng);
+  const int sLight = std::min(int(rng.nextDouble() * (na + 1)), na);
+  const int tCamera = na - sLight;
+  *record = {MutationType::Bidirectional, L, E, nd, na};
+
+  // The light side: the kept prefix, then s' vertices by light sampling, emission and BSDFs.
+  y->vertices.assign(x.vertices.begin(), x.vertices.begin() + L);
+  for (int j = 0; j < sLight; ++j) {
+    const int index = L + j;
+    PathVertex v;
+    if (index == 0) {
+      if (scene.lights().empty()) return false;
+      float pickPdf;
+      int light = scene.pickLight(rng.nextFloat(), &pickPdf);
+      float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+      v.kind = PathVertex::Kind::Light;
+      scene.sampleLightPoint(light, u, &v.p, &v.n);
+      v.ns = v.n;
+      v.shape = scene.lights()[size_t(light)].shape;
+      v.light = light;
+    } else if (index == 1) {
+      const PathVertex& source = y->vertices[0];
+      Vec3f local = squareToCosineHemisphere({rng.nextFloat(), rng.nextFloat()});
+      if (!(local.z > 0)) return false;
+      if (!traceVertex(context_, source, normalize(Frame(source.n).toWorld(local)), &v))
+        return false;
+    } else {
+      if (!scatterStep(context_, y->vertices[size_t(index - 1)], y->vertices[size_t(index - 2)],
+                       TransportMode::Importance, rng, &v))
+        return false;
+    }
+    y->vertices.push_back(v);
+  }
+  // The camera side: t' vertices grown from the kept suffix towards the light.
+  std::vector<PathVertex> grown;  // in the order they were grown
+  auto suffix = [&](int i) -> const PathVertex& { return x.vertices[size_t(n - E + i)]; };
+  for (int j = 0; j < tCamera; ++j) {
+    PathVertex v;
+    const PathVertex& at = j == 0 ? suffix(0) : grown[size_t(j - 1)];
+    if (at.kind == PathVertex::Kind::Camera) {
+      const Camera& camera = scene.camera();
+      Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
+      if (!traceVertex(context_, at, camera.generateRay(film).d, &v)) return false;
+    } else {
+      const PathVertex& from = j == 0 ? suffix(1) : (j == 1 ? suffix(0) : grown[size_t(j - 2)]);
+      if (!scatterStep(context_, at, from, TransportMode::Radiance, rng, &v)) return false;
+    }
+    grown.push_back(v);
+  }
+  y->vertices.insert(y->vertices.end(), grown.rbegin(), grown.rend());
+  y->vertices.insert(y->vertices.end(), x.vertices.end() - E, x.vertices.end());
+
+  // The connecting edge between the two ends (none when the camera side reached the light).
+  const int joint = L + sLight;
+  if (joint == 0) return (*y)[0].light >= 0;
+  const PathVertex& a = (*y)[joint - 1];
+  const PathVertex& b = (*y)[joint];
+  if (y->isSpecular(scene, joint - 1) || y->isSpecular(scene, joint)) return false;
+  return connectVertices(context_, a, b);
+}
+
+double BidirectionalMutation::logDensity(const Path& from, const Path& to,
+                                         const MutationRecord& r) const {
+  const Scene& scene = context_.scene;
+  const int n = int(from.vertices.size()), nTo = int(to.vertices.size());
+  if (n != r.keptLight + r.removed + r.keptCamera || nTo != r.keptLight + r.added + r.keptCamera)
+    return -INFINITY;
+  const double logChoice = logChoiceProbability(n, r.removed, r.added, context_.maxDepth);
+  if (!std::isfinite(logChoice)) return -INFINITY;
+  std::vector<double> pL(size_t(nTo), 0.0), pE(size_t(nTo), 0.0);
+  std::vector<char> delta(size_t(nTo), 0);
+  to.densities(scene, pL.data(), pE.data(), delta.data());
+  // Sum over the splits that could have grown the new vertices, in logarithms.
+  double best = -INFINITY;
+  std::vector<double> terms;
+  for (int s = 0; s <= r.added; ++s) {
+    const int joint = r.keptLight + s;
+    if (joint == 0) {
+      if (to[0].light < 0) continue;
+    } else if (to.isSpecular(scene, joint - 1) || to.isSpecular(scene, joint)) {
+      continue;
+    }
+    double term = 0;
+    for (int j = r.keptLight; j < r.keptLight + r.added; ++j) {
+      const double p = j < joint ? pL[size_t(j)] : pE[size_t(j)];
+      if (!(p > 0) || !std::isfinite(p)) {
+        term = -INFINITY;
+        break;
+      }
+      term += std::log(p);
+    }
+    if (!std::isfinite(term)) continue;
+    terms.push_back(term);
+    best = std::max(best, term);
+  }
+  if (!std::isfinite(best)) return -INFINITY;
+  double sum = 0;
+  for (double t : terms) sum += std::exp(t - best);
+  return logChoice + best + std::log(sum);
+}
+
+}  // namespace farm

@@ -1,0 +1,90 @@
+#include "common/mcmc/mutations/lens_subpath_mutation.h"
+
+#include <cmath>
+#include <vector>
+
+#include "common/scene/scene.h"
+
+namespace farm {
+
+namespace {
+
+// Whether y[first .. n-2] has the shape the walk builds: specular vertices, then a non-specular
+// one at `first`, joinable to what comes before it.
+bool isLensSubpath(const Scene& scene, const Path& y, int first) {
+  const int n = int(y.vertices.size());
+  if (first < 0 || first > n - 2 || n - 2 - first > LensSubpathMutation::kMaxSpecularChain)
+    return false;
+  for (int j = first + 1; j <= n - 2; ++j) {
+    if (!y.isSpecular(scene, j)) return false;
+  }
+  if (y.isSpecular(scene, first)) return false;
+  return first == 0 ? y[0].light >= 0 : !y.isSpecular(scene, first - 1);
+}
+
+}  // namespace
+
+bool LensSubpathMutation::appliesTo(const Path& x) const {
+  return x.vertices.size() >= 2 &&
+         isLensSubpath(context_.scene, x, firstNonSpecularFromCamera(context_.scene, x));
+}
+
+bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationRecord* record) const {
+  const Scene& scene = context_.scene;
+  const int n = int(x.vertices.size());
+  const int m = firstNonSpecularFromCamera(scene, x);
+  const Camera& camera = scene.camera();
+  // Walk from the camera through whatever Dirac lobes the new ray meets.
+  std::vector<PathVertex> walk;  // from the camera towards the light
+  const PathVertex& eye = x.vertices.back();
+  Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
+  Vec3f w = camera.generateRay(film).d;
+  PathVertex previous = eye;
+  for (;;) {
+    PathVertex v;
+    if (!traceVertex(context_, previous, w, &v)) return false;
+    walk.push_back(v);
+    const int length = m + int(walk.size());  // edges of the path this would make
+    if (context_.maxDepth >= 0 && length > context_.maxDepth) return false;
+    const Bsdf& bsdf = scene.bsdfOf(v.shape);
+    if (!bsdf.isDelta()) break;
+    if (int(walk.size()) > kMaxSpecularChain) return false;
+    Vec3f wo = normalize(previous.p - v.p);
+    if (!sidesAgree(wo, v.n, v.ns)) return false;
+    Frame frame(v.ns);
+    float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+    BsdfSample bs;
+    if (!bsdf.sample(frame.toLocal(wo), u, TransportMode::Radiance, &bs)) return false;
+    w = normalize(frame.toWorld(bs.wi));
+    if (!sidesAgree(w, v.n, v.ns)) return false;
+    previous = v;
+  }
+  y->vertices.assign(x.vertices.begin(), x.vertices.begin() + m);
+  y->vertices.insert(y->vertices.end(), walk.rbegin(), walk.rend());
+  y->vertices.push_back(eye);
+  *record = {MutationType::LensSubpath, m, 1, n - 1 - m, int(walk.size())};
+  if (m == 0) return (*y)[0].light >= 0;
+  return connectVertices(context_, (*y)[m - 1], (*y)[m]);
+}
+
+double LensSubpathMutation::logDensity(const Path& from, const Path& to,
+                                       const MutationRecord& r) const {
+  const Scene& scene = context_.scene;
+  const int nTo = int(to.vertices.size());
+  if (int(from.vertices.size()) != r.keptLight + r.removed + 1 ||
+      nTo != r.keptLight + r.added + 1 || r.added < 1)
+    return -INFINITY;
+  if (!isLensSubpath(scene, to, r.keptLight)) return -INFINITY;
+  if (context_.maxDepth >= 0 && to.length() > context_.maxDepth) return -INFINITY;
+  std::vector<double> pL(size_t(nTo), 0.0), pE(size_t(nTo), 0.0);
+  std::vector<char> delta(size_t(nTo), 0);
+  to.densities(scene, pL.data(), pE.data(), delta.data());
+  double logT = 0;
+  for (int j = r.keptLight; j <= nTo - 2; ++j) {
+    if (!(pE[size_t(j)] > 0)) return -INFINITY;
+    logT += std::log(pE[size_t(j)]);
+  }
+  return logT;
+}
+
+}  // namespace farm

@@ -1,0 +1,131 @@
+#include "common/mcmc/mutations/mutation.h"
+
+#include <cmath>
+
+#include "common/scene/scene.h"
+
+namespace farm {
+
+const char* mutationName(MutationType type) {
+  switch (type) {
+    case MutationType::Bidirectional:
+      return "bidir";
+    case MutationType::LensSubpath:
+      return "lens-subpath";
+    case MutationType::LensPerturbation:
+      return "lens";
+    case MutationType::CausticPerturbation:
+      return "caustic";
+    case MutationType::MultiChainPerturbation:
+      return "multichain";
+  }
+  return "?";
+}
+
+bool traceVertex(const MutationContext& context, const PathVertex& from, const Vec3f& w,
+                 PathVertex* hit) {
+  const Scene& scene = context.scene;
+  Ray ray = scene.spawnRay(from.p, from.n, w);
+  ++context.rays;
+  SurfaceHit h;
+  if (!scene.intersect(ray, &h)) return false;
+  *hit = PathVertex();
+  hit->kind = PathVertex::Kind::Surface;
+  hit->p = h.p;
+  hit->n = h.ng;
+  hit->ns = h.ns;
+  hit->shape = h.shape;
+  hit->light = scene.lightOf(h.shape);
+  return true;
+}
+
+bool connectVertices(const MutationContext& context, const PathVertex& a, const PathVertex& b) {
+  ++context.rays;
+  return context.scene.visible(a.p, a.n, b.p, b.n);
+}
+
+int firstNonSpecularFromCamera(const Scene& scene, const Path& x) {
+  int m = x.length() - 1;
+  while (m > 0 && x.isSpecular(scene, m)) --m;
+  return m;
+}
+
+bool isReflection(const Path& x, int i) {
+  const PathVertex& v = x[i];
+  return dot(x[i - 1].p - v.p, v.ns) * dot(x[i + 1].p - v.p, v.ns) > 0;
+}
+
+bool specularBounce(const Scene& scene, const PathVertex& at, const Vec3f& from, bool reflection,
+                    Vec3f* w) {
+  Vec3f wo = normalize(from - at.p);
+  if (!sidesAgree(wo, at.n, at.ns)) return false;
+  Frame frame(at.ns);
+  Vec3f local;
+  if (!scene.bsdfOf(at.shape).specularDirection(frame.toLocal(wo), reflection, &local))
+    return false;
+  *w = normalize(frame.toWorld(local));
+  return sidesAgree(*w, at.n, at.ns);
+}
+
+Vec3f tracedDirection(const Scene& scene, const PathVertex& from, const PathVertex& to) {
+  return normalize(to.p - scene.spawnRay(from.p, from.n, to.p - from.p).o);
+}
+
+double angleBetween(const Vec3f& a, const Vec3f& b) {
+  // atan2 of |a x b| and a . b: accurate where acos of the dot product is not (tiny angles).
+  return std::atan2(double(length(cross(a, b))), double(dot(a, b)));
+}
+
+double logAnglePerturbationDensity(double theta, double theta1, double theta2) {
+  if (!(theta >= theta1 && theta <= theta2) || !(theta > 0)) return -INFINITY;
+  return -std::log(2 * M_PI * std::sin(theta) * theta * std::log(theta2 / theta1));
+}
+
+Vec3f perturbDirection(const Vec3f& w, double theta1, double theta2, Rng& rng) {
+  const double theta = theta2 * std::exp(std::log(theta1 / theta2) * rng.nextDouble());
+  const double phi = 2 * M_PI * rng.nextDouble();
+  const double st = std::sin(theta);
+  Frame frame(w);
+  return normalize(frame.toWorld(
+      Vec3f(float(st * std::cos(phi)), float(st * std::sin(phi)), float(std::cos(theta)))));
+}
+
+double logFilmPerturbationDensity(double r, double r1, double r2) {
+  if (!(r >= r1 && r <= r2)) return -INFINITY;
+  return -std::log(2 * M_PI * r * r * std::log(r2 / r1));
+}
+
+Vec2f perturbFilm(const Vec2f& film, double r1, double r2, Rng& rng) {
+  const double r = r2 * std::exp(std::log(r1 / r2) * rng.nextDouble());
+  const double phi = 2 * M_PI * rng.nextDouble();
+  return Vec2f(film.x + float(r * std::cos(phi)), film.y + float(r * std::sin(phi)));
+}
+
+bool followSpecularChain(const MutationContext& context, const Path& x, Path* y, int from, int to,
+                         const Vec3f& firstDirection) {
+  const Scene& scene = context.scene;
+  const int step = to > from ? 1 : -1;
+  Vec3f w = firstDirection;
+  for (int i = from + step;; i += step) {
+    if (!traceVertex(context, (*y)[i - step], w, &(*y)[i])) return false;
+    if (i == to) return !y->isSpecular(scene, i);
+    if (!y->isSpecular(scene, i)) return false;
+    if (!specularBounce(scene, (*y)[i], (*y)[i - step].p, isReflection(x, i), &w)) return false;
+  }
+}
+
+PerturbationSizes perturbationSizes(const Camera& camera) {
+  PerturbationSizes sizes;
+  const double pixels = double(camera.width()) * camera.height();
+  sizes.r1 = 0.1;
+  sizes.r2 = std::max(1.0, std::sqrt(0.1 * pixels / M_PI));
+  // The angle one pixel subtends at the image centre.
+  Vec2f centre(0.5f * camera.width(), 0.5f * camera.height());
+  double radiansPerPixel = angleBetween(camera.generateRay(centre).d,
+                                        camera.generateRay(Vec2f(centre.x + 1, centre.y)).d);
+  sizes.theta1 = radiansPerPixel * sizes.r1;
+  sizes.theta2 = std::min(radiansPerPixel * sizes.r2, 0.5 * M_PI);
+  return sizes;
+}
+
+}  // namespace farm

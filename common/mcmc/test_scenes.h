@@ -1,0 +1,52 @@
+#pragma once
+// Scenes the statistical tests of the Markov chains write for themselves (test code only).
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace farm {
+
+// A floor seen obliquely from above, with a glass ball resting above it and a square light over
+// the ball that the camera does not see: paths E D L, E D S S L (the ball's caustic), E S S D L
+// (the floor through the ball), E S S D S S L (the caustic through the ball) and E S L (the
+// light's glint), so that every perturbation applies to some of them, through curved glass where
+// the Dirac lobes' solid-angle ratios do not cancel; and a light large enough that BDPT, where
+// the reference and the seeds come from, converges on all of them.
+inline std::string glassBallScene() {
+  static const std::string path = [] {
+    std::string p = (std::filesystem::temp_directory_path() / "mlt_glass_ball.xml").string();
+    std::ofstream(p) << R"(<?xml version="1.0"?>
+<scene version="0.5.0">
+  <integrator type="path"><integer name="maxDepth" value="8"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="40"/>
+    <transform name="toWorld"><lookat origin="0, 2.5, -2.5" target="0, 0.3, 0" up="0, 1, 0"/>
+    </transform>
+    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <bsdf type="diffuse" id="floor"><rgb name="reflectance" value="0.7 0.6 0.5"/></bsdf>
+  <bsdf type="dielectric" id="glass"><float name="intIOR" value="1.5"/></bsdf>
+  <bsdf type="diffuse" id="black"><rgb name="reflectance" value="0 0 0"/></bsdf>
+  <shape type="rectangle">
+    <transform name="toWorld"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+    <ref id="floor"/>
+  </shape>
+  <shape type="sphere">
+    <point name="center" x="0" y="0.9" z="0"/><float name="radius" value="0.4"/>
+    <ref id="glass"/>
+  </shape>
+  <shape type="rectangle">
+    <transform name="toWorld"><scale value="0.4"/><rotate x="1" angle="90"/>
+      <translate y="2.2" z="0.5"/></transform>
+    <ref id="black"/>
+    <emitter type="area"><rgb name="radiance" value="20 20 20"/></emitter>
+  </shape>
+</scene>
+)";
+    return p;
+  }();
+  return path;
+}
+
+}  // namespace farm
