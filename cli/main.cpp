@@ -46,6 +46,8 @@ struct RenderOptions {
   std::string reference;
   float largeStep = farm::RenderSettings().largeStepProbability;
   std::string mutationMix;
+  double erptChains = farm::RenderSettings().erptChains;
+  int erptLength = farm::RenderSettings().erptLength;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -54,9 +56,10 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       ->add_option("--algorithm", o->algorithm,
                    "pt (path tracing), bdpt (bidirectional), pssmlt (primary-sample MLT over "
                    "bdpt), pssmlt-pt (the same over pt), mmlt (multiplexed MLT), mlt (path-space "
-                   "MLT with Veach's mutations)")
+                   "MLT with Veach's mutations), erpt (energy redistribution path tracing)")
       ->default_str("pssmlt");
-  command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt)")->default_str("16");
+  command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt), seeds per pixel (erpt)")
+      ->default_str("16");
   command->add_option("--mpp", o->mpp, "mutations per pixel (pssmlt, pssmlt-pt, mmlt, mlt)")
       ->default_str("16");
   command
@@ -70,6 +73,13 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "to the current path: bidir (bidirectional), lens-subpath, lens (lens "
                    "perturbation), caustic, multichain; names left out keep their defaults")
       ->default_str(farm::formatMutationMix(farm::MutationMix()));
+  command
+      ->add_option("--erpt-chains", o->erptChains,
+                   "erpt: chains a seed path starts on average (Cline et al. 2005); its energy "
+                   "is spread in deposits of Z / (chains * length)")
+      ->default_str("1");
+  command->add_option("--erpt-length", o->erptLength, "erpt: mutations per chain")
+      ->default_str("100");
   o->timeOption = command->add_option(
       "--time", o->time,
       "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
@@ -122,6 +132,8 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     return false;
   }
   s->largeStepProbability = o.largeStep;
+  s->erptChains = o.erptChains;
+  s->erptLength = o.erptLength;
   if (!farm::parseMutationMix(o.mutationMix, &s->mutationMix, error)) {
     *error = "--mutation-mix: " + *error;
     return false;

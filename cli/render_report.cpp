@@ -16,6 +16,7 @@ std::string format(const char* fmt, double value) {
 }
 
 const char* workUnit(const RenderSettings& s) {
+  if (s.algorithm == Algorithm::ERPT) return "seeds";
   return isMarkovChain(s.algorithm) ? "mutations" : "samples";
 }
 
@@ -76,7 +77,7 @@ std::string statusText(const JobProgress& p) {
       << formatDuration(p.etaSeconds) << "\n";
   out << "  chains: " << p.chainsFinished << " of " << p.chainsTotal << " finished, "
       << p.chainsLeased << " running\n";
-  if (isMarkovChain(p.settings.algorithm) && p.normalization > 0) {
+  if (needsBootstrap(p.settings.algorithm) && p.normalization > 0) {
     out << "  Z = " << format("%.6g", p.normalization) << " +- "
         << format("%.3g", p.normalizationStdError) << " (bootstrap "
         << format("%.2f", p.bootstrapSeconds) << " s)\n";
@@ -136,7 +137,7 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   out << "render: " << scene << ", " << algorithmName(s.algorithm) << ", " << p.width << "x"
       << p.height << ", seed " << s.seed << "\n";
   const double pixels = double(p.width) * p.height;
-  if (isMarkovChain(s.algorithm)) {
+  if (needsBootstrap(s.algorithm)) {
     out << "  Z = " << format("%.6g", p.normalization) << " +- "
         << format("%.3g", p.normalizationStdError) << " (standard error, "
         << format("%.3g", p.normalization > 0 ? 100 * p.normalizationStdError / p.normalization : 0)

@@ -135,7 +135,7 @@ void Job::prepare() {
     renderStarted_ = SteadyClock::now();
     phase_ = JobPhase::kRendering;
     std::string z;
-    if (isMarkovChain(spec_.settings.algorithm)) {
+    if (needsBootstrap(spec_.settings.algorithm)) {
       z = ", Z = " + std::to_string(bootstrap_.normalization) + " +- " +
           std::to_string(bootstrap_.normalizationStdError) + " after " +
           std::to_string(bootstrap_.seconds) + " s of bootstrap";

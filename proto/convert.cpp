@@ -11,6 +11,7 @@ constexpr AlgorithmPair kAlgorithms[] = {
     {Algorithm::PathTracing, v1::PT}, {Algorithm::Bidirectional, v1::BDPT},
     {Algorithm::PSSMLT, v1::PSSMLT},  {Algorithm::PSSMLTOverPT, v1::PSSMLT_PT},
     {Algorithm::MMLT, v1::MMLT},      {Algorithm::MLT, v1::MLT},
+    {Algorithm::ERPT, v1::ERPT},
 };
 void toProto(const MutationMix& mix, v1::MutationMix* m) {
   m->set_bidirectional(mix.bidirectional);
@@ -74,6 +75,8 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_num_chains(settings.numChains);
   m.set_large_step_probability(settings.largeStepProbability);
   toProto(settings.mutationMix, m.mutable_mutation_mix());
+  m.set_erpt_chains(settings.erptChains);
+  m.set_erpt_length(settings.erptLength);
   return m;
 }
 
@@ -91,6 +94,8 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.numChains = m.num_chains();
   s.largeStepProbability = m.large_step_probability();
   if (!fromProto(m.mutation_mix(), &s.mutationMix, error)) return false;
+  if (m.erpt_chains() != 0) s.erptChains = m.erpt_chains();
+  if (m.erpt_length() != 0) s.erptLength = m.erpt_length();
   *out = s;
   return true;
 }
@@ -113,6 +118,13 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_resume_flush_index(spec.resumeFlushIndex);
   m.set_seed_path(spec.seedPath);
   toProto(spec.mutationMix, m.mutable_mutation_mix());
+  m.set_tile_x(spec.tileX);
+  m.set_tile_y(spec.tileY);
+  m.set_tile_width(spec.tileWidth);
+  m.set_tile_height(spec.tileHeight);
+  m.set_erpt_chains(spec.erptChains);
+  m.set_erpt_length(spec.erptLength);
+  m.set_erpt_deposit(spec.erptDeposit);
   return m;
 }
 
@@ -134,6 +146,13 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   s.resumeFlushIndex = m.resume_flush_index();
   s.seedPath = m.seed_path();
   if (!fromProto(m.mutation_mix(), &s.mutationMix, error)) return false;
+  s.tileX = m.tile_x();
+  s.tileY = m.tile_y();
+  s.tileWidth = m.tile_width();
+  s.tileHeight = m.tile_height();
+  s.erptChains = m.erpt_chains();
+  s.erptLength = m.erpt_length();
+  s.erptDeposit = m.erpt_deposit();
   if (s.flushInterval <= 0) {
     *error = "chain " + std::to_string(s.chainIndex) + " has flush interval " +
              std::to_string(s.flushInterval) + " (must be > 0)";

@@ -159,7 +159,8 @@ TEST_P(ClusterFailure, KilledWorkerChangesNothingButTime) {
   auto doomed = startWorker("doomed");
   ASSERT_FALSE(waitForText(scratch / "doomed.log", "registered", seconds(15)).empty());
 
-  // 64x48 over 64 chains of 12288 samples or mutations each, flushed every 4096.
+  // 64x48: pt and mlt over 64 chains of 12288 samples or mutations each, flushed every 4096;
+  // erpt over four tiles, flushed every 4096 seeds.
   std::vector<std::string> settings = {"--algorithm", c.algorithm, "--width", "64",
                                        "--height",    "48",        "--seed",  "3"};
   settings.insert(settings.end(), c.budget.begin(), c.budget.end());
@@ -175,7 +176,8 @@ TEST_P(ClusterFailure, KilledWorkerChangesNothingButTime) {
   EXPECT_EQ(doomed->wait(seconds(10)), 128 + SIGKILL);
   const int64_t doneAtKill = workDone(coordinator.address(), job, scratch.path());
   EXPECT_GT(doneAtKill, 0);
-  EXPECT_LT(doneAtKill, 64 * 48 * 256) << "the worker finished before it could be killed";
+  const int64_t total = int64_t(64) * 48 * std::stoll(c.budget.at(1));
+  EXPECT_LT(doneAtKill, total) << "the worker finished before it could be killed";
 
   auto survivor = startWorker("survivor");
   CommandResult fetched = runCommand({FARM_CLI_BIN, "fetch", "--coordinator", coordinator.address(),
@@ -203,7 +205,8 @@ INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterTest,
                                            ClusterCase{"pssmlt", {"--mpp", "32"}},
                                            ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
                                            ClusterCase{"mmlt", {"--mpp", "32"}},
-                                           ClusterCase{"mlt", {"--mpp", "32"}}),
+                                           ClusterCase{"mlt", {"--mpp", "32"}},
+                                           ClusterCase{"erpt", {"--spp", "4"}}),
                          [](const auto& info) {
                            std::string name = info.param.algorithm;
                            std::replace(name.begin(), name.end(), '-', '_');
@@ -212,7 +215,8 @@ INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterTest,
 
 INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterFailure,
                          ::testing::Values(ClusterCase{"pt", {"--spp", "256"}},
-                                           ClusterCase{"mlt", {"--mpp", "256"}}),
+                                           ClusterCase{"mlt", {"--mpp", "256"}},
+                                           ClusterCase{"erpt", {"--spp", "8"}}),
                          [](const auto& info) { return info.param.algorithm; });
 
 }  // namespace

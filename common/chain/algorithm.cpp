@@ -16,6 +16,7 @@ constexpr Named kAlgorithms[] = {
     {Algorithm::PathTracing, "pt"}, {Algorithm::Bidirectional, "bdpt"},
     {Algorithm::PSSMLT, "pssmlt"},  {Algorithm::PSSMLTOverPT, "pssmlt-pt"},
     {Algorithm::MMLT, "mmlt"},      {Algorithm::MLT, "mlt"},
+    {Algorithm::ERPT, "erpt"},
 };
 
 struct MixField {
@@ -50,7 +51,7 @@ bool parseAlgorithm(const std::string& name, Algorithm* out) {
 }
 
 const char* algorithmList() {
-  return "pt, bdpt, pssmlt, pssmlt-pt, mmlt or mlt";
+  return "pt, bdpt, pssmlt, pssmlt-pt, mmlt, mlt or erpt";
 }
 
 std::vector<Algorithm> allAlgorithms() {

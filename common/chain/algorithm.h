@@ -14,6 +14,7 @@ enum class Algorithm {
   PSSMLTOverPT,   // "pssmlt-pt": the same over path tracing
   MMLT,           // "mmlt": multiplexed MLT (Hachisuka et al. 2014)
   MLT,            // "mlt": path-space MLT with Veach's mutations (Veach and Guibas 1997)
+  ERPT,           // "erpt": energy redistribution path tracing (Cline et al. 2005)
 };
 
 const char* algorithmName(Algorithm a);
@@ -27,6 +28,11 @@ std::vector<Algorithm> allAlgorithms();
 inline bool isMarkovChain(Algorithm a) {
   return a == Algorithm::PSSMLT || a == Algorithm::PSSMLTOverPT || a == Algorithm::MMLT ||
          a == Algorithm::MLT;
+}
+// Algorithms whose coordinator estimates Z first: the Markov chains, and ERPT, whose deposit
+// energy is a share of it.
+inline bool needsBootstrap(Algorithm a) {
+  return isMarkovChain(a) || a == Algorithm::ERPT;
 }
 // Chains whose state is a primary-sample vector (Kelemen et al. 2002).
 inline bool isPrimarySampleSpace(Algorithm a) {

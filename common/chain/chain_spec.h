@@ -26,6 +26,13 @@ struct ChainSpec {
   std::string seedPath;
   double seedContribution = 0;
   MutationMix mutationMix;  // mlt
+  // erpt: a tile of pixels [tileX, tileX + tileWidth) x [tileY, tileY + tileHeight); its budget
+  // counts seeds, one pass over the tile's pixels after another. Each seed starts on average
+  // erptChains chains of erptLength mutations that deposit erptDeposit luminance each.
+  int tileX = 0, tileY = 0, tileWidth = 0, tileHeight = 0;
+  double erptChains = 1;
+  int erptLength = 100;
+  double erptDeposit = 0;
   // mutations (pssmlt) or samples (pt/bdpt) this chain runs; < 0: until told to stop
   int64_t budget = 0;
   int64_t flushInterval = 0;  // mutations (or samples) between flushes

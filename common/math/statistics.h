@@ -1,6 +1,7 @@
 #pragma once
 // Quantiles for the statistical tests of the samplers: the standard normal's (Acklam's
-// rational approximation, relative error below 1.2e-9) and the chi-square distribution's
+// rational approximation, relative error below 1.2e-9), Student's t's, and the chi-square
+// distribution's
 // (Wilson and Hilferty 1931: (X/k)^(1/3) is nearly normal; a few per cent from the exact
 // quantile at k >= 10, on the safe side in the upper tail).
 #include <cmath>
@@ -27,6 +28,16 @@ inline double normalQuantile(double p) {
   double q = p - 0.5, r = q * q;
   return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
          (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1);
+}
+
+// t with P(T <= t) = p for Student's t with nu degrees of freedom: the Cornish-Fisher expansion
+// about the normal quantile (Abramowitz and Stegun 26.7.5), within a per cent for nu >= 10.
+inline double studentQuantile(double nu, double p) {
+  const double z = normalQuantile(p), z2 = z * z;
+  const double g1 = (z2 + 1) * z / 4;
+  const double g2 = ((5 * z2 + 16) * z2 + 3) * z / 96;
+  const double g3 = (((3 * z2 + 19) * z2 + 17) * z2 - 15) * z / 384;
+  return z + g1 / nu + g2 / (nu * nu) + g3 / (nu * nu * nu);
 }
 
 // x with P(X > x) = alpha for X chi-square distributed with k degrees of freedom.

@@ -44,12 +44,6 @@ bool deserializeState(const std::string& bytes, const Scene& scene, Rng* rng, Pa
   return true;
 }
 
-// The mutation mix as selection probabilities over the mutations that apply to x.
-struct Selection {
-  double probability[kMutationTypes] = {};
-  double total = 0;
-};
-
 }  // namespace
 
 double logAcceptanceRatio(const Mutation& mutation, const Path& x, const PathContribution& fx,
@@ -71,30 +65,75 @@ bool mltChainPath(const std::string& state, const Scene& scene, std::string* pat
   return true;
 }
 
+PathChain::PathChain(const Scene& scene, int maxDepth, const MutationMix& mix)
+    : scene_(scene),
+      context_{scene, maxDepth},
+      bidirectional_(context_),
+      lensSubpath_(context_),
+      lens_(context_),
+      caustic_(context_),
+      multiChain_(context_),
+      mutations_{&bidirectional_, &lensSubpath_, &lens_, &caustic_, &multiChain_},
+      weights_{mix.bidirectional, mix.lensSubpath, mix.lensPerturbation, mix.causticPerturbation,
+               mix.multiChainPerturbation} {}
+
+PathChain::Selection PathChain::select(const Path& x) const {
+  Selection s;
+  for (int i = 0; i < kMutationTypes; ++i) {
+    if (weights_[i] > 0 && mutations_[i]->appliesTo(x)) s.total += s.probability[i] = weights_[i];
+  }
+  for (double& p : s.probability) p = s.total > 0 ? p / s.total : 0;
+  return s;
+}
+
+bool PathChain::start(const Path& x) {
+  x_ = x;
+  fx_ = x_.contribution(scene_, context_.maxDepth);
+  sx_ = select(x_);
+  return fx_.carriesLight();
+}
+
+void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* flusher) {
+  double a = 0;
+  int chosen = -1;
+  PathContribution fy;
+  Selection sy;
+  if (sx_.total > 0) {
+    double u = rng.nextDouble(), run = 0;
+    for (int i = 0; i < kMutationTypes && chosen < 0; ++i) {
+      run += sx_.probability[i];
+      if (u < run && sx_.probability[i] > 0) chosen = i;
+    }
+    for (int i = kMutationTypes - 1; i >= 0 && chosen < 0; --i) {  // rounding at the top
+      if (sx_.probability[i] > 0) chosen = i;
+    }
+    const Mutation& mutation = *mutations_[chosen];
+    MutationRecord record;
+    if (mutation.propose(x_, rng, &y_, &record)) {
+      fy = y_.contribution(scene_, context_.maxDepth);
+      if (fy.carriesLight()) {
+        sy = select(y_);
+        const double logR = logAcceptanceRatio(mutation, x_, fx_, y_, fy, record,
+                                               sx_.probability[chosen], sy.probability[chosen]);
+        a = logR >= 0 ? 1.0 : std::exp(logR);
+      }
+    }
+  }
+  if (a > 0) film.add(fy.film, fy.color, float(a) * deposit);
+  if (a < 1) film.add(fx_.film, fx_.color, float(1 - a) * deposit);
+  const bool accept = a >= 1 || (a > 0 && rng.nextDouble() < a);
+  if (flusher && chosen >= 0) flusher->tally(mutationName(MutationType(chosen)), accept);
+  if (accept) {
+    std::swap(x_, y_);
+    fx_ = fy;
+    sx_ = sy;
+  }
+}
+
 void runMltChain(const Scene& scene, const ChainSpec& spec,
                  const std::function<bool(ChainFlush&&)>& onFlush,
                  const std::atomic<bool>* cancel) {
   const std::string chain = "chain " + std::to_string(spec.chainIndex);
-  MutationContext context{scene, spec.maxDepth};
-  const BidirectionalMutation bidirectional(context);
-  const LensSubpathMutation lensSubpath(context);
-  const LensPerturbation lens(context);
-  const CausticPerturbation caustic(context);
-  const MultiChainPerturbation multiChain(context);
-  const Mutation* mutations[kMutationTypes] = {&bidirectional, &lensSubpath, &lens, &caustic,
-                                               &multiChain};
-  const MutationMix& mix = spec.mutationMix;
-  const double weights[kMutationTypes] = {mix.bidirectional, mix.lensSubpath, mix.lensPerturbation,
-                                          mix.causticPerturbation, mix.multiChainPerturbation};
-  auto select = [&](const Path& x) {
-    Selection s;
-    for (int i = 0; i < kMutationTypes; ++i) {
-      if (weights[i] > 0 && mutations[i]->appliesTo(x)) s.total += s.probability[i] = weights[i];
-    }
-    for (double& p : s.probability) p = s.total > 0 ? p / s.total : 0;
-    return s;
-  };
-
   Rng rng(spec.seed, streamId(kMltChainDomain, spec.chainIndex));
   Path x;
   if (!spec.resumeState.empty()) {
@@ -103,51 +142,15 @@ void runMltChain(const Scene& scene, const ChainSpec& spec,
   } else if (spec.seedPath.empty() || !x.deserialize(spec.seedPath, scene)) {
     throw std::runtime_error(chain + " has no seed path of this scene");
   }
-  PathContribution fx = x.contribution(scene, spec.maxDepth);
-  if (!fx.carriesLight())
+  PathChain walker(scene, spec.maxDepth, spec.mutationMix);
+  if (!walker.start(x))
     throw std::runtime_error(chain + ": the seed path carries no light on this host");
-  Selection sx = select(x);
-
   ChainFlusher flusher(spec, scene, onFlush, cancel);
-  SplatBuffer& film = flusher.film();
-  Path y;
-  MutationRecord record;
   while (flusher.budgetLeft()) {
-    double a = 0;
-    int chosen = -1;
-    PathContribution fy;
-    Selection sy;
-    if (sx.total > 0) {
-      double u = rng.nextDouble(), run = 0;
-      for (int i = 0; i < kMutationTypes && chosen < 0; ++i) {
-        run += sx.probability[i];
-        if (u < run && sx.probability[i] > 0) chosen = i;
-      }
-      if (chosen < 0) {  // rounding at the top of the range
-        for (int i = kMutationTypes - 1; i >= 0 && chosen < 0; --i)
-          if (sx.probability[i] > 0) chosen = i;
-      }
-      const Mutation& mutation = *mutations[chosen];
-      if (mutation.propose(x, rng, &y, &record)) {
-        fy = y.contribution(scene, spec.maxDepth);
-        if (fy.carriesLight()) {
-          sy = select(y);
-          const double logR = logAcceptanceRatio(mutation, x, fx, y, fy, record,
-                                                 sx.probability[chosen], sy.probability[chosen]);
-          a = logR >= 0 ? 1.0 : std::exp(logR);
-        }
-      }
-    }
-    if (a > 0) film.add(fy.film, fy.color, float(a));
-    if (a < 1) film.add(fx.film, fx.color, float(1 - a));
-    const bool accept = a >= 1 || (a > 0 && rng.nextDouble() < a);
-    if (chosen >= 0) flusher.tally(mutationName(MutationType(chosen)), accept);
-    if (accept) {
-      std::swap(x, y);
-      fx = fy;
-      sx = sy;
-    }
-    if (!flusher.countMutation(context.rays, [&] { return serializeState(rng, x); })) return;
+    walker.step(rng, flusher.film(), 1.0f, &flusher);
+    if (!flusher.countMutation(walker.rays(),
+                               [&] { return serializeState(rng, walker.current()); }))
+      return;
   }
 }
 

@@ -9,10 +9,52 @@
 #include <atomic>
 #include <functional>
 
+#include "common/chain/chain_flusher.h"
 #include "common/chain/chain_spec.h"
+#include "common/mcmc/mutations/bidirectional_mutation.h"
+#include "common/mcmc/mutations/caustic_perturbation.h"
+#include "common/mcmc/mutations/lens_perturbation.h"
+#include "common/mcmc/mutations/lens_subpath_mutation.h"
+#include "common/mcmc/mutations/multi_chain_perturbation.h"
 #include "common/scene/scene.h"
 
 namespace farm {
+
+// The Metropolis-Hastings step over path space that mlt's chains and ERPT's short chains share.
+class PathChain {
+ public:
+  PathChain(const Scene& scene, int maxDepth, const MutationMix& mix);
+  PathChain(const PathChain&) = delete;
+  PathChain& operator=(const PathChain&) = delete;
+
+  // Starts (or restarts) at x; false when x carries no light.
+  bool start(const Path& x);
+  // One step: the proposal's colour with weight a * deposit and the current path's with
+  // (1 - a) * deposit go to `film`; the proposal is tallied with `flusher` when given.
+  void step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* flusher = nullptr);
+  const Path& current() const { return x_; }
+  uint64_t rays() const { return context_.rays; }
+
+ private:
+  struct Selection {
+    double probability[kMutationTypes] = {};
+    double total = 0;
+  };
+  Selection select(const Path& x) const;
+
+  const Scene& scene_;
+  MutationContext context_;
+  BidirectionalMutation bidirectional_;
+  LensSubpathMutation lensSubpath_;
+  LensPerturbation lens_;
+  CausticPerturbation caustic_;
+  MultiChainPerturbation multiChain_;
+  const Mutation* mutations_[kMutationTypes];
+  double weights_[kMutationTypes];
+  Path x_, y_;
+  PathContribution fx_;
+  Selection sx_;
+};
 
 // Runs the chain of spec (seedPath, mutationMix, maxDepth) to its budget, flushing through
 // onFlush; returns at once when *cancel becomes true. Throws std::runtime_error for a seed or
@@ -20,11 +62,6 @@ namespace farm {
 void runMltChain(const Scene& scene, const ChainSpec& spec,
                  const std::function<bool(ChainFlush&&)>& onFlush,
                  const std::atomic<bool>* cancel = nullptr);
-
-class Mutation;
-struct MutationRecord;
-struct PathContribution;
-class Path;
 
 // log of the Metropolis-Hastings ratio of the move x -> y that `mutation` proposed with `record`,
 // the mutation having been picked with probability selectX at x and selectY at y:

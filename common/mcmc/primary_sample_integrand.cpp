@@ -95,6 +95,7 @@ std::unique_ptr<PrimarySampleIntegrand> makePrimarySampleIntegrand(Algorithm alg
     case Algorithm::MLT:  // path-space MLT bootstraps from BDPT
       return std::make_unique<BidirectionalIntegrand>(scene, maxDepth);
     case Algorithm::PSSMLTOverPT:
+    case Algorithm::ERPT:  // ERPT's Z is the mean energy of a path-traced seed
       return std::make_unique<PathTracingIntegrand>(scene, maxDepth);
     case Algorithm::MMLT:
       return std::make_unique<MultiplexedIntegrand>(scene, maxDepth);

@@ -2,7 +2,11 @@
 // Runs a whole RenderJob in this process (bootstrap, every chain on the TBB pool, sums in
 // double) with no coordinator: what the statistical tests and benchmarks of common/ use.
 // `farm render` goes through the coordinator core instead, with the same chains.
+#include <array>
 #include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "common/render/render_job.h"
 
@@ -14,6 +18,11 @@ struct LocalRenderResult {
   int64_t work = 0;  // mutations or samples
   int64_t rejectedSplats = 0;
   double seconds = 0;
+  // Per chain (work unit), the sum of each channel over all its splats: the units are
+  // independent, so their spread between two renders measures the variance of sums over the
+  // image even where one unit's splats spread over many pixels (MLT, ERPT).
+  std::vector<std::array<double, 3>> chainTotals;
+  std::map<std::string, MutationTally> tallies;  // proposals and acceptances by kind
 };
 
 LocalRenderResult renderLocally(const RenderJob& job);

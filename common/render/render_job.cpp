@@ -9,6 +9,7 @@
 #include "common/chain/chain_flusher.h"
 #include "common/film/splat_buffer.h"
 #include "common/mcmc/bootstrap.h"
+#include "common/mcmc/erpt.h"
 #include "common/mcmc/mlt_chain.h"
 #include "common/mcmc/pssmlt_chain.h"
 #include "common/scene/film_override.h"
@@ -112,7 +113,7 @@ static int resolvedMaxDepth(const RenderSettings& s, const Scene& scene) {
 
 BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   BootstrapResult result;
-  if (!isMarkovChain(settings_.algorithm)) return result;
+  if (!needsBootstrap(settings_.algorithm)) return result;
   auto start = std::chrono::steady_clock::now();
   const int64_t pixels = int64_t(width()) * height();
   int64_t count = settings_.bootstrapSamples > 0
@@ -133,6 +134,11 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   result.normalizationStdError = c.stdError;
   result.candidates = count;
   result.nonZeroCandidates = c.nonZero;
+  if (settings_.algorithm == Algorithm::ERPT) {  // Z sets the deposit energy; no seeds
+    result.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
   const int chains = settings_.numChains > 0 ? settings_.numChains : kDefaultChains;
   std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
   const int maxDepth = resolvedMaxDepth(settings_, *scene_);
@@ -161,6 +167,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
 }
 
 std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) const {
+  if (settings_.algorithm == Algorithm::ERPT) return planTiles(bootstrap);
   const bool mcmc = isMarkovChain(settings_.algorithm);
   const int chains = mcmc ? int(bootstrap.seedContributions.size())
                           : (settings_.numChains > 0 ? settings_.numChains : kDefaultChains);
@@ -203,6 +210,40 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
   return specs;
 }
 
+std::vector<ChainSpec> RenderJob::planTiles(const BootstrapResult& bootstrap) const {
+  if (!(bootstrap.normalization > 0)) throw std::runtime_error("ERPT needs the bootstrap's Z");
+  // Tiles of 32 x 32 pixels (fewer at the borders), each a work unit: seconds of work for a
+  // worker at 16 seeds per pixel, and enough of them to spread over many hosts.
+  constexpr int kTile = 32;
+  const int64_t spp = settings_.timeBudgetSeconds > 0 ? -1 : settings_.samplesPerPixel;
+  std::vector<ChainSpec> specs;
+  for (int y = 0; y < height(); y += kTile) {
+    for (int x = 0; x < width(); x += kTile) {
+      ChainSpec s;
+      s.jobId = jobId_;
+      s.chainIndex = uint32_t(specs.size());
+      s.algorithm = Algorithm::ERPT;
+      s.seed = settings_.seed;
+      s.maxDepth = resolvedMaxDepth(settings_, *scene_);
+      s.tileX = x;
+      s.tileY = y;
+      s.tileWidth = std::min(kTile, width() - x);
+      s.tileHeight = std::min(kTile, height() - y);
+      const int64_t tilePixels = int64_t(s.tileWidth) * s.tileHeight;
+      s.budget = spp < 0 ? -1 : tilePixels * spp;
+      // Flush every few thousand seeds, in whole passes over the tile.
+      const int64_t passes = std::max<int64_t>(1, 4096 / tilePixels);
+      s.flushInterval =
+          s.budget > 0 ? std::min(passes * tilePixels, s.budget) : passes * tilePixels;
+      s.erptChains = settings_.erptChains;
+      s.erptLength = settings_.erptLength;
+      s.erptDeposit = bootstrap.normalization / (settings_.erptChains * settings_.erptLength);
+      specs.push_back(std::move(s));
+    }
+  }
+  return specs;
+}
+
 double RenderJob::imageScale(const BootstrapResult& bootstrap, int64_t workDone) const {
   if (workDone <= 0) return 0;
   if (isMarkovChain(settings_.algorithm)) return bootstrap.normalization / double(workDone);
@@ -213,6 +254,8 @@ void RenderJob::runChain(const ChainSpec& spec, const std::function<bool(ChainFl
                          const std::atomic<bool>* cancel) const {
   if (spec.algorithm == Algorithm::MLT)
     runMltChain(*scene_, spec, onFlush, cancel);
+  else if (spec.algorithm == Algorithm::ERPT)
+    runErptTile(*scene_, spec, onFlush, cancel);
   else if (isPrimarySampleSpace(spec.algorithm))
     runPssmltChain(*scene_, spec, onFlush, cancel);
   else
@@ -271,6 +314,11 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
   } else {
     m["farm:samples"] = std::to_string(workDone);
     m["farm:samplesPerPixel"] = formatDouble(workDone / pixels);
+  }
+  if (settings_.algorithm == Algorithm::ERPT) {
+    m["farm:normalization"] = formatDouble(bootstrap.normalization);
+    m["farm:erptChainsPerSeed"] = formatDouble(settings_.erptChains);
+    m["farm:erptChainLength"] = std::to_string(settings_.erptLength);
   }
   return m;
 }

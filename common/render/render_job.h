@@ -71,6 +71,8 @@ class RenderJob {
   ImageMetadata metadata(const BootstrapResult& bootstrap, int64_t workDone, double seconds) const;
 
  private:
+  std::vector<ChainSpec> planTiles(const BootstrapResult& bootstrap) const;  // erpt
+
   std::shared_ptr<const Scene> scene_;
   RenderSettings settings_;
   std::string jobId_;

@@ -31,6 +31,10 @@ std::string RenderSettings::validate() const {
     err << "large-step probability must be in (0, 1], not " << largeStepProbability;
   } else if (std::string mix = validateMutationMix(mutationMix); !mix.empty()) {
     err << mix;
+  } else if (!(erptChains > 0 && erptChains <= 1024)) {
+    err << "ERPT chains per seed must be in (0, 1024], not " << erptChains;
+  } else if (erptLength < 1 || erptLength > 1 << 20) {
+    err << "ERPT chain length must be in 1.." << (1 << 20) << " mutations, not " << erptLength;
   }
   return err.str();
 }

@@ -20,6 +20,10 @@ struct RenderSettings {
   int numChains = 0;                  // independent chains (work units); 0: default
   float largeStepProbability = 0.3f;  // Kelemen et al. 2002, section 4
   MutationMix mutationMix;            // mlt: how often each of Veach's mutations is proposed
+  // erpt (Cline et al. 2005): seeds per pixel are samplesPerPixel; each seed starts on average
+  // erptChains chains of erptLength mutations.
+  double erptChains = 1;
+  int erptLength = 100;
 
   // Empty when the settings are usable, otherwise what is wrong (for the user, one line).
   std::string validate() const;

@@ -8,6 +8,7 @@
 
 #include <cmath>
 
+#include "common/math/statistics.h"
 #include "common/render/local_render.h"
 #include "common/scene/scene.h"
 #include "common/transport/bidirectional.h"
@@ -112,6 +113,43 @@ TEST(Furnace, Multiplexed) {
 TEST(Furnace, PathSpace) {
   expectFurnace(Algorithm::MLT, -1);
   expectFurnace(Algorithm::MLT, 3);
+}
+// ERPT spreads each seed's energy over many pixels, so the pixels' spread says nothing about the
+// image mean's error: sixteen independent renders give it, with Student's t for 15 degrees of
+// freedom at the same level as 4 standard errors of a normal (about 6e-5 two-sided: 5.2).
+void expectFurnaceEnergyRedistribution(int maxDepth) {
+  const float albedo = 0.6f;
+  auto scene = std::make_shared<Scene>(furnace(albedo, maxDepth));
+  const int renders = 16;
+  std::vector<double> means[3];
+  for (int k = 0; k < renders; ++k) {
+    RenderSettings settings;
+    settings.algorithm = Algorithm::ERPT;
+    settings.samplesPerPixel = 8;
+    settings.erptLength = 20;
+    settings.seed = 100 + k;
+    settings.bootstrapSamples = 1 << 14;
+    RenderJob job(scene, settings, "furnace");
+    LocalRenderResult r = renderLocally(job);
+    EXPECT_EQ(r.rejectedSplats, 0);
+    PixelStats st = pixelStats(r.image);
+    for (int c = 0; c < 3; ++c) means[c].push_back(st.mean[c]);
+  }
+  const double D = maxDepth < 0 ? INFINITY : maxDepth;
+  const double factor = (1 - std::pow(double(albedo), D)) / (1 - albedo);
+  const double le[3] = {1.0, 0.5, 2.0};
+  for (int c = 0; c < 3; ++c) {
+    double sum = 0, sumSq = 0;
+    for (double m : means[c]) sum += m, sumSq += m * m;
+    double mean = sum / renders;
+    double se = std::sqrt(std::max(0.0, (sumSq - renders * mean * mean) / (renders - 1)) / renders);
+    EXPECT_NEAR(mean, le[c] * factor, 5.2 * se) << "erpt channel " << c << " maxDepth " << maxDepth;
+  }
+}
+
+TEST(Furnace, EnergyRedistribution) {
+  expectFurnaceEnergyRedistribution(-1);
+  expectFurnaceEnergyRedistribution(3);
 }
 
 // A floor (a large rectangle at y = 0, normal +y) lit by a sphere of radius r at height h,
@@ -225,6 +263,48 @@ TEST(AnalyticIrradiance, Multiplexed) {
 }
 TEST(AnalyticIrradiance, PathSpace) {
   expectIrradiance(Algorithm::MLT);
+}
+// ERPT moves each seed's energy across pixels, so its pixels are not independent estimates; 32
+// independent renders are. Per block of 4 x 4 pixels, their mean against the analytic radiance
+// averaged over the block, with Student's t for 31 degrees of freedom and a Bonferroni bound over
+// the 16 blocks (1e-4 in all): the energy must land where the light falls, block by block.
+TEST(AnalyticIrradiance, EnergyRedistribution) {
+  auto scene = std::make_shared<Scene>(irradianceScene());
+  const Camera& cam = scene->camera();
+  const int renders = 32, blocks = 16, side = cam.width() / 4;
+  std::vector<std::vector<double>> blockMeans(blocks);
+  for (int k = 0; k < renders; ++k) {
+    RenderSettings settings;
+    settings.algorithm = Algorithm::ERPT;
+    settings.samplesPerPixel = 16;
+    settings.erptLength = 20;
+    settings.seed = 200 + k;
+    settings.bootstrapSamples = 1 << 14;
+    RenderJob job(scene, settings, "irradiance");
+    LocalRenderResult r = renderLocally(job);
+    std::vector<double> sums(blocks, 0.0);
+    for (int y = 0; y < cam.height(); ++y) {
+      for (int x = 0; x < cam.width(); ++x)
+        sums[size_t(x / side + 4 * (y / side))] += r.image.at(x, y).y;
+    }
+    for (int b = 0; b < blocks; ++b) blockMeans[b].push_back(sums[b] / (side * side));
+  }
+  const double bound = studentQuantile(renders - 1, 1 - 1e-4 / (2 * blocks));
+  for (int b = 0; b < blocks; ++b) {
+    double expected = 0;
+    for (int y = 0; y < side; ++y) {
+      for (int x = 0; x < side; ++x)
+        expected += pixelFootprintRadiance(cam, (b % 4) * side + x, (b / 4) * side + y, 8);
+    }
+    expected /= side * side;
+    double sum = 0, sumSq = 0;
+    for (double m : blockMeans[b]) sum += m, sumSq += m * m;
+    const double mean = sum / renders;
+    const double se =
+        std::sqrt(std::max(0.0, (sumSq - renders * mean * mean) / (renders - 1)) / renders);
+    // The 1e-3 covers the 8 x 8 quadrature of each footprint.
+    EXPECT_NEAR(mean, expected, bound * se + 1e-3 * expected) << "block " << b;
+  }
 }
 
 }  // namespace

@@ -15,28 +15,46 @@ float powerHeuristic(float a, float b) {
 PathTracer::PathTracer(const Scene& scene, int maxDepth)
     : scene_(scene), maxDepth_(maxDepth < 0 ? kUnboundedDepth : maxDepth) {}
 
-Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
-  Spectrum L(0.0f), beta(1.0f);
+template <typename Add>
+void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVertex>* vertices,
+                      const Add& add) const {
+  Spectrum beta(1.0f);
   Ray ray = primary;
   bool previousDelta = true;  // the camera ray cannot be light-sampled
   float previousPdf = 0;      // solid-angle density of the last BSDF sample
   Vec3f previousP = ray.o;
+  if (vertices) {
+    vertices->clear();
+    PathVertex camera;
+    camera.kind = PathVertex::Kind::Camera;
+    camera.p = ray.o;
+    vertices->push_back(camera);
+  }
   for (int depth = 1;; ++depth) {
     SurfaceHit hit;
     ++rays_;
     if (!scene_.intersect(ray, &hit)) break;
     const int light = scene_.lightOf(hit.shape);
+    if (vertices) {
+      PathVertex v;
+      v.p = hit.p;
+      v.n = hit.ng;
+      v.ns = hit.ns;
+      v.shape = hit.shape;
+      v.light = light;
+      vertices->push_back(v);
+    }
     if (light >= 0) {
       Spectrum Le = scene_.emitted(light, hit.ng, -ray.d);
       if (!isBlack(Le)) {
         if (previousDelta) {
-          L += beta * Le;
+          add(beta * Le, nullptr);
         } else {
           // The same path could have come from next-event estimation: weight both (eq. 9.13).
           float d2 = lengthSquared(hit.p - previousP);
           float cosL = absDot(hit.ng, ray.d);
           float pdfLight = scene_.lightPickPdf(light) / scene_.lights()[light].area * d2 / cosL;
-          L += beta * Le * powerHeuristic(previousPdf, pdfLight);
+          add(beta * Le * powerHeuristic(previousPdf, pdfLight), nullptr);
         }
       }
     }
@@ -68,7 +86,15 @@ Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
           ++rays_;
           if (scene_.visible(hit.p, hit.ng, pl, nl)) {
             float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
-            L += beta * f * Le * (std::fabs(wi.z) * w / pdfLight);
+            PathVertex lightVertex;
+            if (vertices) {
+              lightVertex.kind = PathVertex::Kind::Light;
+              lightVertex.p = pl;
+              lightVertex.n = lightVertex.ns = nl;
+              lightVertex.shape = scene_.lights()[l].shape;
+              lightVertex.light = l;
+            }
+            add(beta * f * Le * (std::fabs(wi.z) * w / pdfLight), &lightVertex);
           }
         }
       }
@@ -93,7 +119,25 @@ Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
     }
     ray = scene_.spawnRay(hit.p, hit.ng, wiWorld);
   }
+}
+
+Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
+  Spectrum L(0.0f);
+  walk(primary, sampler, nullptr, [&](const Spectrum& value, const PathVertex*) { L += value; });
   return L;
+}
+
+void PathTracer::visitPaths(const Vec2f& film, Sampler& sampler,
+                            const std::function<void(const TracedPath&)>& visit) const {
+  thread_local std::vector<PathVertex> vertices;
+  const float pixelCount = scene_.camera().pixelCount();
+  walk(scene_.camera().generateRay(film), sampler, &vertices,
+       [&](const Spectrum& value, const PathVertex* light) {
+         // The camera side in walk order is camera, x_1, x_2, ...: reversed, light first.
+         thread_local std::vector<PathVertex> reversed;
+         reversed.assign(vertices.rbegin(), vertices.rend());
+         visit({light, reversed.data(), int(reversed.size()), value * pixelCount});
+       });
 }
 
 void PathTracer::sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const {

@@ -2,10 +2,12 @@
 // Unidirectional path tracing with next-event estimation, the two strategies combined by the
 // power heuristic (Veach 1997, ch. 9). The reference estimator the others are checked against.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "common/film/splat_buffer.h"
 #include "common/scene/scene.h"
+#include "common/transport/path_vertex.h"
 #include "common/transport/sampler.h"
 
 namespace farm {
@@ -20,9 +22,30 @@ class PathTracer {
   // One camera sample at `film`: appends the splat A_px * L (see Camera).
   void sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const;
 
+  // The paths one camera sample at `film` builds, each with its MIS-weighted value as its splat
+  // would carry it (A_px * the radiance it adds): those that hit a light, and those completed by
+  // next-event estimation. Each path is the light vertex of next-event estimation (none when the
+  // camera's subpath hit the light itself) followed by camera[0 .. count-1], the camera's
+  // subpath from its far end back to the camera. The sum of the values is sample()'s splat;
+  // ERPT seeds its chains with these paths.
+  struct TracedPath {
+    const PathVertex* light;   // nullptr when camera[0] lies on a light
+    const PathVertex* camera;  // camera[count - 1] is the camera
+    int count;
+    Spectrum value;
+  };
+  void visitPaths(const Vec2f& film, Sampler& sampler,
+                  const std::function<void(const TracedPath&)>& visit) const;
+
   uint64_t rays() const { return rays_; }  // rays traced by this instance (one thread)
 
  private:
+  // The walk behind radiance() and visitPaths(): calls add(value, lightVertex) for each
+  // contribution, with the camera-side vertices in *vertices when it is not null.
+  template <typename Add>
+  void walk(const Ray& primary, Sampler& sampler, std::vector<PathVertex>* vertices,
+            const Add& add) const;
+
   const Scene& scene_;
   int maxDepth_;
   mutable uint64_t rays_ = 0;

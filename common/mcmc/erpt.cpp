@@ -1,0 +1,84 @@
+#include "common/mcmc/erpt.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "common/chain/chain_flusher.h"
+#include "common/mcmc/mlt_chain.h"
+#include "common/transport/path_tracer.h"
+
+namespace farm {
+
+namespace {
+constexpr uint64_t kErptDomain = 0xe497;
+}  // namespace
+
+void runErptTile(const Scene& scene, const ChainSpec& spec,
+                 const std::function<bool(ChainFlush&&)>& onFlush,
+                 const std::atomic<bool>* cancel) {
+  const int64_t tilePixels = int64_t(spec.tileWidth) * spec.tileHeight;
+  if (tilePixels <= 0 || spec.tileX < 0 || spec.tileY < 0 ||
+      spec.tileX + spec.tileWidth > scene.camera().width() ||
+      spec.tileY + spec.tileHeight > scene.camera().height())
+    throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
+                             ": the tile is not on the film");
+  if (!(spec.erptDeposit > 0) || spec.erptLength < 1 || !(spec.erptChains > 0))
+    throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
+                             ": ERPT needs a positive deposit, length and chain count");
+  MutationMix perturbations{0, 0, 1, 1, 0};  // Cline et al.: lens and caustic perturbations
+  PathChain chain(scene, spec.maxDepth, perturbations);
+  PathTracer tracer(scene, spec.maxDepth);
+  ChainFlusher flusher(spec, scene, onFlush, cancel);
+  SplatBuffer& film = flusher.film();
+  const double length = spec.erptLength;
+  const int width = scene.camera().width();
+  Path x;
+  while (flusher.budgetLeft()) {
+    const int64_t k = flusher.done();
+    const int64_t local = k % tilePixels, pass = k / tilePixels;
+    const int px = spec.tileX + int(local % spec.tileWidth);
+    const int py = spec.tileY + int(local / spec.tileWidth);
+    Rng rng(spec.seed, streamId(kErptDomain, streamId(uint64_t(py) * width + px, pass)));
+    IndependentSampler sampler(&rng);
+    const Vec2f seedFilm(std::min(px + rng.nextFloat(), std::nextafter(float(px + 1), 0.0f)),
+                         std::min(py + rng.nextFloat(), std::nextafter(float(py + 1), 0.0f)));
+    tracer.visitPaths(seedFilm, sampler, [&](const PathTracer::TracedPath& seed) {
+      if (!isValidRadiance(seed.value)) {
+        flusher.rejectSplats();
+        return;
+      }
+      const double energy = luminance(seed.value);
+      if (!(energy > 0)) return;
+      x.vertices.clear();
+      if (seed.light) x.vertices.push_back(*seed.light);
+      x.vertices.insert(x.vertices.end(), seed.camera, seed.camera + seed.count);
+      if (!chain.start(x)) {
+        // A path the chains cannot evaluate (a lobe at the edge of rounding): its energy
+        // stays where path tracing put it.
+        film.add(seedFilm, seed.value);
+        return;
+      }
+      const double expectedChains = energy / (length * spec.erptDeposit);
+      int chains;
+      double deposit;
+      if (expectedChains <= kMaxErptChains) {
+        chains = int(std::floor(rng.nextDouble() + expectedChains));
+        deposit = spec.erptDeposit;
+      } else {
+        chains = kMaxErptChains;
+        deposit = energy / (length * kMaxErptChains);
+      }
+      for (int c = 0; c < chains; ++c) {
+        chain.start(x);
+        for (int i = 0; i < spec.erptLength; ++i) chain.step(rng, film, float(deposit), &flusher);
+      }
+    });
+    const int64_t doneAfter = k + 1;
+    if (!flusher.countMutation(tracer.rays() + chain.rays(),
+                               [&] { return std::to_string(doneAfter); }))
+      return;
+  }
+}
+
+}  // namespace farm

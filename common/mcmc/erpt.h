@@ -1,0 +1,29 @@
+#pragma once
+// Energy redistribution path tracing (Cline, Talbot and Egbert 2005). Path tracing draws seeds,
+// stratified over the pixels of a tile; each path a seed builds, carrying energy e (the
+// luminance of its splat), starts on average e / (N e_d) chains of N mutations that each deposit
+// e_d (the path's colour of luminance e_d), so that its energy is spread over nearby paths in
+// the proportions of f instead of landing on one pixel. The mutations are Veach's lens and
+// caustic perturbations, which keep f stationary; the number of chains is e / (N e_d) rounded up
+// or down at random, so the expected deposit of every seed path is its energy and the image is
+// unbiased, whatever e_d is. e_d = Z / (chains per seed * N), Z the mean energy of a seed (from
+// the bootstrap), so that a seed starts about `chains per seed` chains.
+//
+// A work unit is a tile with its seeds (pass after pass over its pixels, seed k of pixel p
+// drawing from the stream (seed, p, pass)); it flushes and resumes at seed boundaries. A seed
+// path of extreme energy starts at most kMaxErptChains chains, each depositing its share.
+#include <atomic>
+#include <functional>
+
+#include "common/chain/chain_spec.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+
+constexpr int kMaxErptChains = 64;
+
+void runErptTile(const Scene& scene, const ChainSpec& spec,
+                 const std::function<bool(ChainFlush&&)>& onFlush,
+                 const std::atomic<bool>* cancel = nullptr);
+
+}  // namespace farm

@@ -1,0 +1,69 @@
+// An ERPT tile is a work unit like the others: it flushes at seed boundaries, a tile resumed
+// from a flush continues bit for bit, and a tile that is not on the film or has no deposit
+// energy is refused. (Its image is checked against analytic answers and the references in
+// furnace_test.cpp and reference_test.cpp.)
+#include "common/mcmc/erpt.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "common/render/render_job.h"
+
+namespace farm {
+namespace {
+
+TEST(Erpt, ResumedTileContinuesExactly) {
+  RenderSettings settings;
+  settings.algorithm = Algorithm::ERPT;
+  settings.width = settings.height = 48;
+  settings.samplesPerPixel = 2;
+  settings.erptLength = 30;
+  settings.bootstrapSamples = 1 << 14;
+  auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml", settings);
+  RenderJob job(scene, settings, "erpt");
+  std::vector<ChainSpec> tiles = job.planChains(job.bootstrap());
+  ASSERT_EQ(tiles.size(), 4u);  // 32 x 32, 16 x 32, 32 x 16, 16 x 16
+  EXPECT_EQ(tiles[3].tileWidth, 16);
+  EXPECT_EQ(tiles[3].tileHeight, 16);
+  ChainSpec spec = tiles[0];
+  spec.flushInterval = 512;
+  std::vector<ChainFlush> whole;
+  job.runChain(spec, [&](ChainFlush&& f) {
+    whole.push_back(std::move(f));
+    return true;
+  });
+  ASSERT_EQ(whole.size(), 4u);  // 2048 seeds
+  EXPECT_TRUE(whole.back().finished);
+  double energy = 0;
+  for (const ChainFlush& f : whole) {
+    for (float v : f.splats) energy += v;
+  }
+  EXPECT_GT(energy, 0);
+
+  ChainSpec resumed = spec;
+  resumed.resumeState = whole[1].state;
+  resumed.resumeMutations = 1024;
+  resumed.resumeFlushIndex = 2;
+  std::vector<ChainFlush> rest;
+  job.runChain(resumed, [&](ChainFlush&& f) {
+    rest.push_back(std::move(f));
+    return true;
+  });
+  ASSERT_EQ(rest.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(rest[size_t(k)].flushIndex, whole[size_t(k + 2)].flushIndex);
+    EXPECT_EQ(rest[size_t(k)].splats, whole[size_t(k + 2)].splats) << "flush " << k + 2;
+  }
+
+  ChainSpec offFilm = spec;
+  offFilm.tileX = 40;
+  EXPECT_THROW(job.runChain(offFilm, [](ChainFlush&&) { return true; }), std::runtime_error);
+  ChainSpec noDeposit = spec;
+  noDeposit.erptDeposit = 0;
+  EXPECT_THROW(job.runChain(noDeposit, [](ChainFlush&&) { return true; }), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace farm
