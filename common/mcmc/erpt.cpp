@@ -36,13 +36,27 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
   Path x;
   while (flusher.budgetLeft()) {
     const int64_t k = flusher.done();
-    const int64_t local = k % tilePixels, pass = k / tilePixels;
-    const int px = spec.tileX + int(local % spec.tileWidth);
-    const int py = spec.tileY + int(local / spec.tileWidth);
-    Rng rng(spec.seed, streamId(kErptDomain, streamId(uint64_t(py) * width + px, pass)));
+    Vec2f seedFilm;
+    Rng rng;
+    if (spec.budget >= 0) {
+      // A seed budget: pass after pass over the tile's pixels, one stratified seed each.
+      const int64_t local = k % tilePixels, pass = k / tilePixels;
+      const int px = spec.tileX + int(local % spec.tileWidth);
+      const int py = spec.tileY + int(local / spec.tileWidth);
+      rng = Rng(spec.seed, streamId(kErptDomain, streamId(uint64_t(py) * width + px, pass)));
+      seedFilm = Vec2f(std::min(px + rng.nextFloat(), std::nextafter(float(px + 1), 0.0f)),
+                       std::min(py + rng.nextFloat(), std::nextafter(float(py + 1), 0.0f)));
+    } else {
+      // A time budget stops the units wherever they are, some further than others: each seed
+      // then lands anywhere on the film, so that the image is unbiased at any count.
+      rng = Rng(spec.seed, streamId(kErptDomain, streamId(spec.chainIndex, uint64_t(k))));
+      const Camera& camera = scene.camera();
+      seedFilm = Vec2f(
+          std::min(rng.nextFloat() * camera.width(), std::nextafter(float(camera.width()), 0.0f)),
+          std::min(rng.nextFloat() * camera.height(),
+                   std::nextafter(float(camera.height()), 0.0f)));
+    }
     IndependentSampler sampler(&rng);
-    const Vec2f seedFilm(std::min(px + rng.nextFloat(), std::nextafter(float(px + 1), 0.0f)),
-                         std::min(py + rng.nextFloat(), std::nextafter(float(py + 1), 0.0f)));
     tracer.visitPaths(seedFilm, sampler, [&](const PathTracer::TracedPath& seed) {
       if (!isValidRadiance(seed.value)) {
         flusher.rejectSplats();

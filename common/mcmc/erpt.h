@@ -10,8 +10,10 @@
 // the bootstrap), so that a seed starts about `chains per seed` chains.
 //
 // A work unit is a tile with its seeds (pass after pass over its pixels, seed k of pixel p
-// drawing from the stream (seed, p, pass)); it flushes and resumes at seed boundaries. A seed
-// path of extreme energy starts at most kMaxErptChains chains, each depositing its share.
+// drawing from the stream (seed, p, pass)); it flushes and resumes at seed boundaries. Under a
+// time budget the units stop unevenly, so there each seed lands anywhere on the film instead (as
+// path tracing's samples do then). A seed path of extreme energy starts at most kMaxErptChains
+// chains, each depositing its share.
 #include <atomic>
 #include <functional>
 

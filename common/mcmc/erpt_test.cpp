@@ -65,5 +65,33 @@ TEST(Erpt, ResumedTileContinuesExactly) {
   EXPECT_THROW(job.runChain(noDeposit, [](ChainFlush&&) { return true; }), std::runtime_error);
 }
 
+// Under a time budget a unit may stop anywhere, so its seeds must not favour its own tile: a
+// few hundred seeds of the first tile deposit energy in every quadrant of the film.
+TEST(Erpt, TimeBudgetedSeedsCoverTheFilm) {
+  RenderSettings settings;
+  settings.algorithm = Algorithm::ERPT;
+  settings.width = settings.height = 64;
+  settings.timeBudgetSeconds = 10;
+  settings.erptLength = 5;
+  settings.bootstrapSamples = 1 << 14;
+  auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml", settings);
+  RenderJob job(scene, settings, "erpt");
+  std::vector<ChainSpec> tiles = job.planChains(job.bootstrap());
+  ASSERT_EQ(tiles.size(), 4u);
+  ChainSpec spec = tiles[0];
+  EXPECT_LT(spec.budget, 0);
+  spec.flushInterval = 400;  // and stop it at its first flush
+  double quadrant[4] = {0, 0, 0, 0};
+  job.runChain(spec, [&](ChainFlush&& f) {
+    for (int y = 0; y < f.height; ++y) {
+      for (int x = 0; x < f.width; ++x)
+        quadrant[(x * 2 / f.width) + 2 * (y * 2 / f.height)] +=
+            f.splats[size_t(y * f.width + x) * 3 + 1];
+    }
+    return false;
+  });
+  for (double q : quadrant) EXPECT_GT(q, 0);
+}
+
 }  // namespace
 }  // namespace farm

@@ -171,5 +171,29 @@ TEST(Reference, VeachMisPathSpace) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::MLT, 16});
 }
 
+// veach-bidir: a lamp under a glass shade lights the room through it, glossy and diffuse
+// surfaces; the reference is BDPT at 512 samples per pixel.
+TEST(Reference, VeachBidirPathTracing) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::PathTracing, 16});
+}
+TEST(Reference, VeachBidirBidirectional) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::Bidirectional, 4});
+}
+TEST(Reference, VeachBidirPssmlt) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::PSSMLT, 4});
+}
+TEST(Reference, VeachBidirPssmltOverPathTracing) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::PSSMLTOverPT, 16});
+}
+TEST(Reference, VeachBidirMultiplexed) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::MMLT, 16});
+}
+TEST(Reference, VeachBidirPathSpace) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::MLT, 8});
+}
+TEST(Reference, VeachBidirEnergyRedistribution) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::ERPT, 2});
+}
+
 }  // namespace
 }  // namespace farm
