@@ -52,6 +52,8 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->workDone = m.work_done();
   p->plannedWork = m.planned_work();
   p->rejectedSplats = m.rejected_splats();
+  for (const v1::MutationTally& t : m.tallies())
+    p->tallies.push_back({t.name(), t.proposed(), t.accepted()});
   p->rays = m.rays();
   p->raysPerSecond = m.rays_per_second();
   p->normalization = m.normalization();

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <thread>
 
 #include "cli/embedded_render.h"
@@ -128,7 +129,9 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     }
   }
   if (!(o.largeStep > 0 && o.largeStep <= 1)) {
-    *error = "--large-step must be a probability in (0, 1], not " + std::to_string(o.largeStep);
+    std::ostringstream value;
+    value << o.largeStep;
+    *error = "--large-step must be a probability in (0, 1], not " + value.str();
     return false;
   }
   s->largeStepProbability = o.largeStep;

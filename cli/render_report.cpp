@@ -42,6 +42,19 @@ std::string formatCount(double value) {
   return format("%.0f", value);
 }
 
+// "  acceptance: bidir 12.3% of 1.2M, lens 64.0% of 3.4M\n", or nothing without tallies.
+std::string acceptanceLine(const JobProgress& p) {
+  if (p.tallies.empty()) return "";
+  std::string line = "  acceptance:";
+  for (size_t i = 0; i < p.tallies.size(); ++i) {
+    const MutationTally& t = p.tallies[i];
+    line += (i ? ", " : " ") + t.name + " " +
+            format("%.1f", t.proposed > 0 ? 100.0 * t.accepted / t.proposed : 0.0) + "% of " +
+            formatCount(double(t.proposed));
+  }
+  return line + "\n";
+}
+
 std::string progressLine(const JobProgress& p, int barWidth) {
   std::string line = "[";
   const int filled = int(p.fraction * barWidth);
@@ -82,6 +95,7 @@ std::string statusText(const JobProgress& p) {
         << format("%.3g", p.normalizationStdError) << " (bootstrap "
         << format("%.2f", p.bootstrapSeconds) << " s)\n";
   }
+  out << acceptanceLine(p);
   if (!p.errorSeries.empty()) {
     const ErrorSample& e = p.errorSeries.back();
     out << "  error vs reference: rmse " << format("%.6g", e.rmse) << ", relMSE "
@@ -120,6 +134,13 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["rays"] = p.rays;
   j["rays_per_second"] = p.raysPerSecond;
   j["has_reference"] = p.hasReference;
+  nlohmann::json tallies = nlohmann::json::object();
+  for (const MutationTally& t : p.tallies) {
+    tallies[t.name] = {{"proposed", t.proposed},
+                       {"accepted", t.accepted},
+                       {"acceptance", t.proposed > 0 ? double(t.accepted) / t.proposed : 0.0}};
+  }
+  j["mutations"] = tallies;
   if (!p.errorSeries.empty()) {
     j["rmse"] = p.errorSeries.back().rmse;
     j["relmse"] = p.errorSeries.back().relMse;
@@ -156,6 +177,7 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   if (p.rejectedSplats > 0) {
     out << "  rejected splats (NaN, Inf or negative): " << p.rejectedSplats << "\n";
   }
+  out << acceptanceLine(p);
   if (!p.errorSeries.empty()) {
     const ErrorSample& e = p.errorSeries.back();
     out << "  error vs " << referencePath << ": rmse " << format("%.6g", e.rmse) << ", relMSE "

@@ -108,6 +108,12 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   }
   m->set_error_series_total(p.errorSeriesTotal);
   m->set_rejected_splats(p.rejectedSplats);
+  for (const MutationTally& t : p.tallies) {
+    v1::MutationTally* tally = m->add_tallies();
+    tally->set_name(t.name);
+    tally->set_proposed(t.proposed);
+    tally->set_accepted(t.accepted);
+  }
   m->set_width(p.width);
   m->set_height(p.height);
   *m->mutable_settings() = farm::toProto(p.settings);
@@ -536,6 +542,8 @@ class WorkerService final : public v1::WorkerApi::Service {
     flush.rays = header.rays();
     flush.state = header.state();
     flush.finished = header.finished();
+    for (const v1::MutationTally& t : header.tallies())
+      flush.tallies.push_back({t.name(), t.proposed(), t.accepted()});
     flush.splats.resize(bytes.size() / sizeof(float));
     std::memcpy(flush.splats.data(), bytes.data(), bytes.size());
     bytes.clear();

@@ -358,6 +358,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   if (aggregator_) {
     p.workDone = aggregator_->workDone();
     p.rejectedSplats = aggregator_->rejectedSplats();
+    p.tallies = aggregator_->tallies();
     p.rays = aggregator_->rays();
     if (p.renderSeconds > 0) p.raysPerSecond = double(p.rays) / p.renderSeconds;
   }

@@ -58,7 +58,8 @@ struct JobProgress {
   JobPhase phase = JobPhase::kSubmitted;
   double fraction = 0, samplesPerSecond = 0, elapsedSeconds = 0, etaSeconds = -1;
   int64_t workDone = 0, plannedWork = 0, rejectedSplats = 0;
-  int64_t rays = 0;  // traced for the accepted work
+  int64_t rays = 0;                    // traced for the accepted work
+  std::vector<MutationTally> tallies;  // proposals and acceptances by kind (Markov chains)
   double raysPerSecond = 0;
   double normalization = 0, normalizationStdError = 0;
   double loadSeconds = 0, bootstrapSeconds = 0, renderSeconds = 0;

@@ -1,5 +1,6 @@
 #include "coordinator/splat_aggregator.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace farm {
@@ -40,6 +41,19 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
     why = name + " reports a negative count";
     return FlushOutcome::kBadValues;
   }
+  if (flush.tallies.size() > kMaxTallyKinds) {
+    why = name + " tallies " + std::to_string(flush.tallies.size()) +
+          " kinds of proposal (at most " + std::to_string(kMaxTallyKinds) + ")";
+    return FlushOutcome::kBadValues;
+  }
+  for (const MutationTally& t : flush.tallies) {
+    if (t.name.empty() || t.name.size() > kMaxTallyName || t.proposed < 0 || t.accepted < 0 ||
+        t.accepted > t.proposed) {
+      why = name + " has a malformed tally (a name of 1 to " + std::to_string(kMaxTallyName) +
+            " characters, 0 <= accepted <= proposed)";
+      return FlushOutcome::kBadValues;
+    }
+  }
   // Check everything before adding anything: a rejected flush must leave the sums untouched.
   size_t nonFinite = 0;
   for (float v : flush.splats) nonFinite += !std::isfinite(v);
@@ -51,6 +65,16 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
   workDone_ += flush.mutations;
   rejectedSplats_ += flush.rejectedSplats;
   rays_ += flush.rays;
+  for (const MutationTally& t : flush.tallies) {
+    auto it = std::find_if(tallies_.begin(), tallies_.end(),
+                           [&](const MutationTally& sum) { return sum.name == t.name; });
+    if (it == tallies_.end()) {
+      if (tallies_.size() >= kMaxTallyKinds) continue;  // a job tallies a handful of kinds
+      it = tallies_.insert(tallies_.end(), MutationTally{t.name, 0, 0});
+    }
+    it->proposed += t.proposed;
+    it->accepted += t.accepted;
+  }
   ++acceptedFlushes_;
   ++next;
   return FlushOutcome::kAccepted;

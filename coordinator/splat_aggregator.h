@@ -19,6 +19,9 @@ enum class FlushOutcome {
   kBadValues,     // negative mutations, or a splat that is NaN or infinite
 };
 
+constexpr size_t kMaxTallyKinds = 16;
+constexpr size_t kMaxTallyName = 32;
+
 class SplatAggregator {
  public:
   SplatAggregator(int width, int height, uint32_t numChains);
@@ -32,6 +35,8 @@ class SplatAggregator {
   int64_t rejectedSplats() const { return rejectedSplats_; }
   int64_t rays() const { return rays_; }
   uint64_t acceptedFlushes() const { return acceptedFlushes_; }
+  // Proposals and acceptances of the accepted flushes, by kind, in order of first appearance.
+  const std::vector<MutationTally>& tallies() const { return tallies_; }
   // The flush index the chain's next accepted flush must carry.
   uint32_t nextFlushIndex(uint32_t chain) const { return nextFlush_.at(chain); }
   int width() const { return width_; }
@@ -45,6 +50,7 @@ class SplatAggregator {
   int64_t rejectedSplats_ = 0;
   int64_t rays_ = 0;
   uint64_t acceptedFlushes_ = 0;
+  std::vector<MutationTally> tallies_;
 };
 
 }  // namespace farm

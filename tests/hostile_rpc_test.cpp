@@ -310,6 +310,31 @@ TEST_F(HostileRpcTest, AbsurdResolutionIsRejected) {
       INVALID_ARGUMENT, "film size");
 }
 
+// The algorithms' own parameters get the same scrutiny as the film: a mutation mix without the
+// bidirectional mutation (the chain would not be ergodic), weights that are not numbers, ERPT
+// chains and lengths out of range, an algorithm this coordinator does not know.
+TEST_F(HostileRpcTest, BadAlgorithmParametersAreRejected) {
+  v1::RenderSettings settings = smallSettings();
+  settings.set_algorithm(v1::MLT);
+  settings.mutable_mutation_mix()->set_lens_perturbation(1);
+  const std::vector<File> files = {{"scene.xml", kSceneXml}};
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "bidirectional");
+  settings.mutable_mutation_mix()->set_bidirectional(std::nan(""));
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "bidir");
+  settings = smallSettings();
+  settings.set_algorithm(v1::ERPT);
+  settings.set_erpt_chains(-2);
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "ERPT chains");
+  settings.set_erpt_chains(1);
+  settings.set_erpt_length(1 << 30);
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "ERPT chain length");
+  settings = smallSettings();
+  settings.set_algorithm(v1::Algorithm(99));
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "algorithm");
+  // And the coordinator keeps serving.
+  EXPECT_TRUE(submit(smallSettings(), files, files, "scene.xml").ok());
+}
+
 TEST_F(HostileRpcTest, BundleWithoutTheSceneFileIsRejected) {
   EXPECT_STATUS(
       submit(smallSettings(), {{"other.xml", kSceneXml}}, {{"other.xml", kSceneXml}}, "scene.xml"),

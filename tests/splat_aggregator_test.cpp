@@ -57,6 +57,39 @@ TEST(SplatAggregator, RejectsWhatDoesNotFitWithoutChangingTheSums) {
   EXPECT_EQ(sum.add(makeFlush(0, 0, 1.0f)), FlushOutcome::kAccepted);
 }
 
+// Acceptance tallies count once per accepted flush, like the splats; a malformed tally refuses
+// the whole flush.
+TEST(SplatAggregator, TalliesCountOncePerAcceptedFlush) {
+  SplatAggregator sum(2, 2, 2);
+  ChainFlush a = makeFlush(0, 0, 1.0f);
+  a.tallies = {{"bidir", 10, 3}, {"lens", 5, 4}};
+  ChainFlush b = makeFlush(1, 0, 1.0f);
+  b.tallies = {{"lens", 7, 1}};
+  EXPECT_EQ(sum.add(a), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.add(a), FlushOutcome::kDuplicate);
+  EXPECT_EQ(sum.add(b), FlushOutcome::kAccepted);
+  ASSERT_EQ(sum.tallies().size(), 2u);
+  EXPECT_EQ(sum.tallies()[0].name, "bidir");
+  EXPECT_EQ(sum.tallies()[0].proposed, 10);
+  EXPECT_EQ(sum.tallies()[0].accepted, 3);
+  EXPECT_EQ(sum.tallies()[1].proposed, 12);
+  EXPECT_EQ(sum.tallies()[1].accepted, 5);
+
+  std::string why;
+  for (MutationTally bad : {MutationTally{"lens", 3, 4}, MutationTally{"lens", -1, 0},
+                            MutationTally{"", 1, 1}, MutationTally{std::string(40, 'x'), 1, 1}}) {
+    ChainFlush c = makeFlush(0, 1, 1.0f);
+    c.tallies = {bad};
+    EXPECT_EQ(sum.add(c, &why), FlushOutcome::kBadValues) << bad.name;
+    EXPECT_NE(why.find("tally"), std::string::npos) << why;
+  }
+  ChainFlush many = makeFlush(0, 1, 1.0f);
+  for (int i = 0; i < 17; ++i) many.tallies.push_back({"kind" + std::to_string(i), 1, 1});
+  EXPECT_EQ(sum.add(many, &why), FlushOutcome::kBadValues);
+  EXPECT_EQ(sum.workDone(), 200);
+  EXPECT_EQ(sum.tallies()[1].proposed, 12);
+}
+
 TEST(SplatAggregator, SumsInDoublePrecision) {
   // 2^24 + 1 is not a float: a float accumulator would lose every one of the small additions.
   SplatAggregator sum(1, 1, 2);

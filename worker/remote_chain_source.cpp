@@ -198,6 +198,12 @@ struct RemoteChainSource::Impl {
     header->set_rays(flush.rays);
     header->set_state(flush.state);
     header->set_finished(flush.finished);
+    for (const MutationTally& t : flush.tallies) {
+      v1::MutationTally* tally = header->add_tallies();
+      tally->set_name(t.name);
+      tally->set_proposed(t.proposed);
+      tally->set_accepted(t.accepted);
+    }
     header->set_splat_bytes(uint64_t(flush.splats.size()) * sizeof(float));
     header->set_checksum(checksum);
     bool open = writer->Write(message);
