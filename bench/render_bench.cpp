@@ -48,10 +48,11 @@ void BM_Bidirectional(benchmark::State& state, const char* scene) {
   tracerThroughput<BidirectionalTracer>(state, scene);
 }
 
-// Mutations per second of one PSSMLT chain (bootstrap excluded).
-void BM_Pssmlt(benchmark::State& state, const char* name) {
+// Mutations (or, for ERPT, seeds) per second of one chain of the given algorithm, bootstrap
+// excluded.
+void BM_Chain(benchmark::State& state, const char* name, Algorithm algorithm) {
   RenderSettings s;
-  s.algorithm = Algorithm::PSSMLT;
+  s.algorithm = algorithm;
   s.width = 256;
   s.height = 256;
   s.bootstrapSamples = 1 << 15;
@@ -59,25 +60,42 @@ void BM_Pssmlt(benchmark::State& state, const char* name) {
   auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/" + name + "/scene.xml", s);
   RenderJob job(scene, s, "bench");
   ChainSpec spec = job.planChains(job.bootstrap())[0];
-  int64_t mutations = 0;
+  const int64_t work = algorithm == Algorithm::ERPT ? 1024 : 20000;
+  int64_t done = 0, rays = 0;
   for (auto _ : state) {
-    spec.budget = 20000;
-    spec.flushInterval = 20000;
+    spec.budget = work;
+    spec.flushInterval = work;
     job.runChain(spec, [&](ChainFlush&& f) {
-      mutations += f.mutations;
+      done += f.mutations;
+      rays += f.rays;
       return true;
     });
   }
-  state.counters["mutations/s"] =
-      benchmark::Counter(double(mutations), benchmark::Counter::kIsRate);
+  state.counters[algorithm == Algorithm::ERPT ? "seeds/s" : "mutations/s"] =
+      benchmark::Counter(double(done), benchmark::Counter::kIsRate);
+  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
 }
 
 BENCHMARK_CAPTURE(BM_PathTracing, Cornell, "cornell-box")->MinTime(2.0);
 BENCHMARK_CAPTURE(BM_Bidirectional, Cornell, "cornell-box")->MinTime(2.0);
-BENCHMARK_CAPTURE(BM_Pssmlt, Cornell, "cornell-box")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, CornellPssmlt, "cornell-box", Algorithm::PSSMLT)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, CornellPssmltOverPt, "cornell-box", Algorithm::PSSMLTOverPT)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, CornellMmlt, "cornell-box", Algorithm::MMLT)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, CornellMlt, "cornell-box", Algorithm::MLT)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, CornellErpt, "cornell-box", Algorithm::ERPT)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_PathTracing, WaterCaustic, "water-caustic")->MinTime(2.0);
 BENCHMARK_CAPTURE(BM_Bidirectional, WaterCaustic, "water-caustic")->MinTime(2.0);
-BENCHMARK_CAPTURE(BM_Pssmlt, WaterCaustic, "water-caustic")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, WaterCausticPssmlt, "water-caustic", Algorithm::PSSMLT)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, WaterCausticMlt, "water-caustic", Algorithm::MLT)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Chain, WaterCausticErpt, "water-caustic", Algorithm::ERPT)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace farm
