@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,16 +15,25 @@
 namespace farm {
 namespace {
 
-TEST(Erpt, ResumedTileContinuesExactly) {
+// An ERPT job on the Cornell box at size x size, and its tiles.
+std::vector<ChainSpec> erptTiles(int size, double timeBudget, int length,
+                                 std::unique_ptr<RenderJob>* job) {
   RenderSettings settings;
   settings.algorithm = Algorithm::ERPT;
-  settings.width = settings.height = 48;
+  settings.width = settings.height = size;
   settings.samplesPerPixel = 2;
-  settings.erptLength = 30;
+  settings.timeBudgetSeconds = timeBudget;
+  settings.erptLength = length;
   settings.bootstrapSamples = 1 << 14;
   auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml", settings);
-  RenderJob job(scene, settings, "erpt");
-  std::vector<ChainSpec> tiles = job.planChains(job.bootstrap());
+  *job = std::make_unique<RenderJob>(scene, settings, "erpt");
+  return (*job)->planChains((*job)->bootstrap());
+}
+
+TEST(Erpt, ResumedTileContinuesExactly) {
+  std::unique_ptr<RenderJob> owner;
+  std::vector<ChainSpec> tiles = erptTiles(48, 0, 30, &owner);
+  const RenderJob& job = *owner;
   ASSERT_EQ(tiles.size(), 4u);  // 32 x 32, 16 x 32, 32 x 16, 16 x 16
   EXPECT_EQ(tiles[3].tileWidth, 16);
   EXPECT_EQ(tiles[3].tileHeight, 16);
@@ -68,15 +78,9 @@ TEST(Erpt, ResumedTileContinuesExactly) {
 // Under a time budget a unit may stop anywhere, so its seeds must not favour its own tile: a
 // few hundred seeds of the first tile deposit energy in every quadrant of the film.
 TEST(Erpt, TimeBudgetedSeedsCoverTheFilm) {
-  RenderSettings settings;
-  settings.algorithm = Algorithm::ERPT;
-  settings.width = settings.height = 64;
-  settings.timeBudgetSeconds = 10;
-  settings.erptLength = 5;
-  settings.bootstrapSamples = 1 << 14;
-  auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml", settings);
-  RenderJob job(scene, settings, "erpt");
-  std::vector<ChainSpec> tiles = job.planChains(job.bootstrap());
+  std::unique_ptr<RenderJob> owner;
+  std::vector<ChainSpec> tiles = erptTiles(64, 10, 5, &owner);
+  const RenderJob& job = *owner;
   ASSERT_EQ(tiles.size(), 4u);
   ChainSpec spec = tiles[0];
   EXPECT_LT(spec.budget, 0);

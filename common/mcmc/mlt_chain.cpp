@@ -1,12 +1,12 @@
 #include "common/mcmc/mlt_chain.h"
 
 #include <cmath>
-#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "common/chain/chain_flusher.h"
+#include "common/math/bytes.h"
 #include "common/mcmc/mutations/bidirectional_mutation.h"
 #include "common/mcmc/mutations/caustic_perturbation.h"
 #include "common/mcmc/mutations/lens_perturbation.h"
@@ -22,23 +22,19 @@ constexpr uint64_t kMltChainDomain = 0x3175;
 constexpr uint32_t kStateMagic = 0x3154534d;  // "MST1"
 
 std::string serializeState(const Rng& rng, const Path& path) {
-  std::string s(sizeof(uint32_t) + 2 * sizeof(uint64_t), '\0');
-  uint32_t magic = kStateMagic;
-  uint64_t state = rng.state(), inc = rng.increment();
-  std::memcpy(&s[0], &magic, sizeof magic);
-  std::memcpy(&s[4], &state, sizeof state);
-  std::memcpy(&s[12], &inc, sizeof inc);
+  std::string s;
+  appendBytes(s, kStateMagic);
+  appendBytes(s, rng.state());
+  appendBytes(s, rng.increment());
   return s + path.serialize();
 }
 
 bool deserializeState(const std::string& bytes, const Scene& scene, Rng* rng, Path* path) {
-  if (bytes.size() < 20) return false;
+  size_t at = 0;
   uint32_t magic;
   uint64_t state, inc;
-  std::memcpy(&magic, &bytes[0], sizeof magic);
-  std::memcpy(&state, &bytes[4], sizeof state);
-  std::memcpy(&inc, &bytes[12], sizeof inc);
-  if (magic != kStateMagic || !(inc & 1) || !path->deserialize(bytes.substr(20), scene))
+  if (!readBytes(bytes, at, &magic) || magic != kStateMagic || !readBytes(bytes, at, &state) ||
+      !readBytes(bytes, at, &inc) || !(inc & 1) || !path->deserialize(bytes.substr(at), scene))
     return false;
   rng->restore(state, inc);
   return true;

@@ -12,10 +12,11 @@ namespace farm {
 
 namespace {
 
-class BidirectionalIntegrand final : public PrimarySampleIntegrand {
+// A film point, then one sample of Tracer (BDPT or path tracing) through it.
+template <typename Tracer>
+class FilmPointIntegrand final : public PrimarySampleIntegrand {
  public:
-  BidirectionalIntegrand(const Scene& scene, int maxDepth)
-      : scene_(scene), tracer_(scene, maxDepth) {}
+  FilmPointIntegrand(const Scene& scene, int maxDepth) : scene_(scene), tracer_(scene, maxDepth) {}
   void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
     tracer_.sample(primarySampleFilmPoint(scene_.camera(), sampler), sampler, splats);
   }
@@ -23,21 +24,7 @@ class BidirectionalIntegrand final : public PrimarySampleIntegrand {
 
  private:
   const Scene& scene_;
-  BidirectionalTracer tracer_;
-};
-
-class PathTracingIntegrand final : public PrimarySampleIntegrand {
- public:
-  PathTracingIntegrand(const Scene& scene, int maxDepth)
-      : scene_(scene), tracer_(scene, maxDepth) {}
-  void evaluate(Sampler& sampler, std::vector<Splat>* splats) const override {
-    tracer_.sample(primarySampleFilmPoint(scene_.camera(), sampler), sampler, splats);
-  }
-  uint64_t rays() const override { return tracer_.rays(); }
-
- private:
-  const Scene& scene_;
-  PathTracer tracer_;
+  Tracer tracer_;
 };
 
 class MultiplexedIntegrand final : public PrimarySampleIntegrand {
@@ -93,10 +80,10 @@ std::unique_ptr<PrimarySampleIntegrand> makePrimarySampleIntegrand(Algorithm alg
   switch (algorithm) {
     case Algorithm::PSSMLT:
     case Algorithm::MLT:  // path-space MLT bootstraps from BDPT
-      return std::make_unique<BidirectionalIntegrand>(scene, maxDepth);
+      return std::make_unique<FilmPointIntegrand<BidirectionalTracer>>(scene, maxDepth);
     case Algorithm::PSSMLTOverPT:
     case Algorithm::ERPT:  // ERPT's Z is the mean energy of a path-traced seed
-      return std::make_unique<PathTracingIntegrand>(scene, maxDepth);
+      return std::make_unique<FilmPointIntegrand<PathTracer>>(scene, maxDepth);
     case Algorithm::MMLT:
       return std::make_unique<MultiplexedIntegrand>(scene, maxDepth);
     default:

@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
+
+#include "common/math/bytes.h"
 
 namespace farm {
 
@@ -18,18 +19,6 @@ float gaussian(Rng& rng) {
 float wrapUnit(float v) {
   v -= std::floor(v);
   return v < 1.0f ? v : 0.0f;  // floor can leave exactly 1 after rounding
-}
-
-template <typename T>
-void put(std::string& s, const T& v) {
-  s.append(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-template <typename T>
-bool get(const std::string& s, size_t& at, T* v) {
-  if (at + sizeof(T) > s.size()) return false;
-  std::memcpy(v, s.data() + at, sizeof(T));
-  at += sizeof(T);
-  return true;
 }
 
 constexpr uint32_t kStateMagic = 0x50535331;  // "PSS1"
@@ -122,15 +111,15 @@ void PrimarySampleSampler::reject() {
 
 std::string PrimarySampleSampler::serialize() const {
   std::string s;
-  put(s, kStateMagic);
-  put(s, rng_.state());
-  put(s, rng_.increment());
-  put(s, iteration_);
-  put(s, lastLargeStep_);
-  put(s, uint64_t(x_.size()));
+  appendBytes(s, kStateMagic);
+  appendBytes(s, rng_.state());
+  appendBytes(s, rng_.increment());
+  appendBytes(s, iteration_);
+  appendBytes(s, lastLargeStep_);
+  appendBytes(s, uint64_t(x_.size()));
   for (const Coordinate& c : x_) {
-    put(s, c.value);
-    put(s, c.lastModified);
+    appendBytes(s, c.value);
+    appendBytes(s, c.lastModified);
   }
   return s;
 }
@@ -140,15 +129,16 @@ bool PrimarySampleSampler::deserialize(const std::string& bytes) {
   uint32_t magic;
   uint64_t state, inc, n;
   int64_t iteration, lastLarge;
-  if (!get(bytes, at, &magic) || magic != kStateMagic) return false;
-  if (!get(bytes, at, &state) || !get(bytes, at, &inc) || !get(bytes, at, &iteration) ||
-      !get(bytes, at, &lastLarge) || !get(bytes, at, &n)) {
+  if (!readBytes(bytes, at, &magic) || magic != kStateMagic) return false;
+  if (!readBytes(bytes, at, &state) || !readBytes(bytes, at, &inc) ||
+      !readBytes(bytes, at, &iteration) || !readBytes(bytes, at, &lastLarge) ||
+      !readBytes(bytes, at, &n)) {
     return false;
   }
   if (n > (bytes.size() - at) / (sizeof(float) + sizeof(int64_t))) return false;
   std::vector<Coordinate> x(n);
   for (Coordinate& c : x) {
-    if (!get(bytes, at, &c.value) || !get(bytes, at, &c.lastModified)) return false;
+    if (!readBytes(bytes, at, &c.value) || !readBytes(bytes, at, &c.lastModified)) return false;
     if (!(c.value >= 0 && c.value < 1) || c.lastModified > iteration) return false;
   }
   rng_.restore(state, inc);

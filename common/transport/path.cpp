@@ -1,7 +1,6 @@
 #include "common/transport/path.h"
 
-#include <cstring>
-
+#include "common/math/bytes.h"
 #include "common/scene/scene.h"
 
 namespace farm {
@@ -52,17 +51,6 @@ class ScaledProduct {
   bool ok_ = true;
 };
 
-template <typename T>
-void put(std::string& s, const T& v) {
-  s.append(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-template <typename T>
-bool get(const std::string& s, size_t& at, T* v) {
-  if (at + sizeof(T) > s.size()) return false;
-  std::memcpy(v, s.data() + at, sizeof(T));
-  at += sizeof(T);
-  return true;
-}
 constexpr uint32_t kPathMagic = 0x31485450;  // "PTH1"
 
 }  // namespace
@@ -153,13 +141,13 @@ void Path::densities(const Scene& scene, double* pL, double* pE, char* delta) co
 
 std::string Path::serialize() const {
   std::string s;
-  put(s, kPathMagic);
-  put(s, uint32_t(vertices.size()));
+  appendBytes(s, kPathMagic);
+  appendBytes(s, uint32_t(vertices.size()));
   for (const PathVertex& v : vertices) {
-    put(s, uint8_t(v.kind));
-    for (const Vec3f* x : {&v.p, &v.n, &v.ns}) put(s, *x);
-    put(s, int32_t(v.shape));
-    put(s, int32_t(v.light));
+    appendBytes(s, uint8_t(v.kind));
+    for (const Vec3f* x : {&v.p, &v.n, &v.ns}) appendBytes(s, *x);
+    appendBytes(s, int32_t(v.shape));
+    appendBytes(s, int32_t(v.light));
   }
   return s;
 }
@@ -167,7 +155,8 @@ std::string Path::serialize() const {
 bool Path::deserialize(const std::string& bytes, const Scene& scene) {
   size_t at = 0;
   uint32_t magic, count;
-  if (!get(bytes, at, &magic) || magic != kPathMagic || !get(bytes, at, &count)) return false;
+  if (!readBytes(bytes, at, &magic) || magic != kPathMagic || !readBytes(bytes, at, &count))
+    return false;
   constexpr size_t kVertexBytes = 1 + 9 * sizeof(float) + 2 * sizeof(int32_t);
   if (count < 2 || count > (bytes.size() - at) / kVertexBytes) return false;
   const int shapes = int(scene.description().shapes.size());
@@ -177,8 +166,9 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
     PathVertex& v = read[i];
     uint8_t kind;
     int32_t shape, light;
-    if (!get(bytes, at, &kind) || !get(bytes, at, &v.p) || !get(bytes, at, &v.n) ||
-        !get(bytes, at, &v.ns) || !get(bytes, at, &shape) || !get(bytes, at, &light))
+    if (!readBytes(bytes, at, &kind) || !readBytes(bytes, at, &v.p) ||
+        !readBytes(bytes, at, &v.n) || !readBytes(bytes, at, &v.ns) ||
+        !readBytes(bytes, at, &shape) || !readBytes(bytes, at, &light))
       return false;
     if (kind > uint8_t(PathVertex::Kind::Surface)) return false;
     v.kind = PathVertex::Kind(kind);

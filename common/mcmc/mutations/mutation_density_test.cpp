@@ -184,44 +184,51 @@ Path backWallPath(const Scene& scene, int maxDepth) {
   });
 }
 
-TEST(PerturbationDensity, LensPerturbationIntegratesToOne) {
+// A back-wall path of the Cornell box and a perturbation of its last vertex; `reach` gives the
+// radii on the wall between which its density lives.
+template <typename Perturbation, typename Reach>
+void expectIntegratesToOne(MutationType type, Reach reach) {
   auto scene = load(kShared + "/scenes/cornell-box/scene.xml", 64);
   const int maxDepth = maxDepthOf(*scene);
   const Path x = backWallPath(*scene, maxDepth);
   MutationContext context{*scene, maxDepth};
-  LensPerturbation lens(context);
-  ASSERT_TRUE(lens.appliesTo(x));
+  Perturbation perturbation(context);
+  ASSERT_TRUE(perturbation.appliesTo(x));
   const int k = x.length();
-  MutationRecord record{MutationType::LensPerturbation, k - 1, 1, 1, 1};
-  // One pixel on the wall, and the perturbation's reach: 0.1 to about 11 pixels.
-  const PerturbationSizes sizes = perturbationSizes(scene->camera());
-  const double pixel = double(length(x[k - 1].p - x[k].p)) * sizes.theta1 / sizes.r1;
-  Estimate e =
-      integrateOverPlane(lens, x, record, k - 1, 0.02 * pixel, 3 * sizes.r2 * pixel, 1 << 18);
+  const MutationRecord record{type, k - 1, 1, 1, 1};
+  double rho1, rho2;
+  reach(perturbationSizes(scene->camera()), x, &rho1, &rho2);
+  Estimate e = integrateOverPlane(perturbation, x, record, k - 1, rho1, rho2, 1 << 18);
   EXPECT_NEAR(e.mean, 1.0, kZ * e.stdError + 1e-3) << "standard error " << e.stdError;
   EXPECT_LT(e.stdError, 0.01);
-  std::printf("lens perturbation: integral %.5f +- %.5f\n", e.mean, e.stdError);
+  std::printf("%s: integral %.5f +- %.5f\n", mutationName(type), e.mean, e.stdError);
+}
+
+TEST(PerturbationDensity, LensPerturbationIntegratesToOne) {
+  // One pixel on the wall, and the perturbation's reach: 0.1 to about 11 pixels.
+  expectIntegratesToOne<LensPerturbation>(
+      MutationType::LensPerturbation,
+      [](const PerturbationSizes& sizes, const Path& x, double* rho1, double* rho2) {
+        const int k = x.length();
+        const double pixel = double(length(x[k - 1].p - x[k].p)) * sizes.theta1 / sizes.r1;
+        *rho1 = 0.02 * pixel;
+        *rho2 = 3 * sizes.r2 * pixel;
+      });
 }
 
 TEST(PerturbationDensity, CausticPerturbationIntegratesToOne) {
-  auto scene = load(kShared + "/scenes/cornell-box/scene.xml", 64);
-  const int maxDepth = maxDepthOf(*scene);
-  const Path x = backWallPath(*scene, maxDepth);
-  MutationContext context{*scene, maxDepth};
-  CausticPerturbation caustic(context);
-  ASSERT_TRUE(caustic.appliesTo(x));
-  const int k = x.length();
-  MutationRecord record{MutationType::CausticPerturbation, k - 1, 1, 1, 1};
   // The cone of directions from x_{k-2}, as wide as the largest angle on the wall.
-  const PerturbationSizes sizes = perturbationSizes(scene->camera());
-  const double distance = double(length(x[k - 1].p - x[k - 2].p));
-  const double scale = double(length(x[k].p - x[k - 1].p)) / distance;
-  const double cosine = std::fabs(double(dot(x[k - 1].n, normalize(x[k - 1].p - x[k - 2].p))));
-  Estimate e = integrateOverPlane(caustic, x, record, k - 1, 0.02 * sizes.theta1 * scale * distance,
-                                  3 * sizes.theta2 * scale * distance / cosine, 1 << 18);
-  EXPECT_NEAR(e.mean, 1.0, kZ * e.stdError + 1e-3) << "standard error " << e.stdError;
-  EXPECT_LT(e.stdError, 0.01);
-  std::printf("caustic perturbation: integral %.5f +- %.5f\n", e.mean, e.stdError);
+  expectIntegratesToOne<CausticPerturbation>(
+      MutationType::CausticPerturbation,
+      [](const PerturbationSizes& sizes, const Path& x, double* rho1, double* rho2) {
+        const int k = x.length();
+        const double distance = double(length(x[k - 1].p - x[k - 2].p));
+        const double scale = double(length(x[k].p - x[k - 1].p)) / distance;
+        const double cosine =
+            std::fabs(double(dot(x[k - 1].n, normalize(x[k - 1].p - x[k - 2].p))));
+        *rho1 = 0.02 * sizes.theta1 * scale * distance;
+        *rho2 = 3 * sizes.theta2 * scale * distance / cosine;
+      });
 }
 
 }  // namespace
