@@ -30,9 +30,9 @@
 #include "common/mcmc/mutations/lens_subpath_mutation.h"
 #include "common/mcmc/mutations/multi_chain_perturbation.h"
 #include "common/mcmc/primary_sample_integrand.h"
-#include "common/mcmc/test_scenes.h"
 #include "common/render/render_job.h"
 #include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
 #include "common/transport/bidirectional.h"
 #include "common/transport/path_tracer.h"
 

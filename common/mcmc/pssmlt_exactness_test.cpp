@@ -24,6 +24,7 @@
 #include "common/mcmc/pssmlt_chain.h"
 #include "common/render/render_job.h"
 #include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
 
 namespace farm {
 namespace {
@@ -275,24 +276,7 @@ TEST(PssmltExactness, CornellBoxBlockSharesMultiplexed) {
 // (geometric choice; lengths above 8 share one bin).
 void expectFurnaceDepths(int maxDepth) {
   const double rho = 0.6;
-  SceneDescription d;
-  d.camera.fovDegrees = 90;
-  d.camera.width = d.camera.height = 16;
-  d.maxDepth = maxDepth;
-  BsdfDescription b;
-  b.reflectance = Spectrum(float(rho));
-  b.twoSided = true;
-  d.bsdfs.push_back(b);
-  ShapeDescription sphere;
-  sphere.type = ShapeDescription::Type::Sphere;
-  sphere.center = Vec3f(0.1f, -0.05f, 0.2f);
-  sphere.radius = 1.5f;
-  sphere.flipNormals = true;
-  sphere.bsdf = 0;
-  sphere.isEmitter = true;
-  sphere.radiance = Spectrum(1.0f);
-  d.shapes.push_back(sphere);
-  Scene scene(d);
+  Scene scene(whiteFurnace(float(rho), maxDepth, Spectrum(1.0f), 16));
   auto integrand = makePrimarySampleIntegrand(Algorithm::MMLT, scene, maxDepth);
 
   const int bins = maxDepth > 0 ? maxDepth : 9;

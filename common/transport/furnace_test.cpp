@@ -11,33 +11,11 @@
 #include "common/math/statistics.h"
 #include "common/render/local_render.h"
 #include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
 #include "common/transport/bidirectional.h"
 
 namespace farm {
 namespace {
-
-SceneDescription furnace(float albedo, int maxDepth) {
-  SceneDescription d;
-  d.camera.toWorld = Matrix4::identity();
-  d.camera.fovDegrees = 90;
-  d.camera.width = 24;
-  d.camera.height = 24;
-  d.maxDepth = maxDepth;
-  BsdfDescription b;
-  b.reflectance = Spectrum(albedo);
-  b.twoSided = true;
-  d.bsdfs.push_back(b);
-  ShapeDescription s;
-  s.type = ShapeDescription::Type::Sphere;
-  s.center = Vec3f(0.1f, -0.05f, 0.2f);
-  s.radius = 1.5f;
-  s.flipNormals = true;  // emit towards the inside
-  s.bsdf = 0;
-  s.isEmitter = true;
-  s.radiance = Spectrum(1.0f, 0.5f, 2.0f);
-  d.shapes.push_back(s);
-  return d;
-}
 
 struct PixelStats {
   double mean[3] = {0, 0, 0};
@@ -62,7 +40,7 @@ PixelStats pixelStats(const Image& img) {
 
 void expectFurnace(Algorithm algorithm, int maxDepth) {
   const float albedo = 0.6f;
-  SceneDescription desc = furnace(albedo, maxDepth);
+  SceneDescription desc = whiteFurnace(albedo, maxDepth);
   auto scene = std::make_shared<Scene>(desc);
   RenderSettings settings;
   settings.algorithm = algorithm;
@@ -119,7 +97,7 @@ TEST(Furnace, PathSpace) {
 // freedom at the same level as 4 standard errors of a normal (about 6e-5 two-sided: 5.2).
 void expectFurnaceEnergyRedistribution(int maxDepth) {
   const float albedo = 0.6f;
-  auto scene = std::make_shared<Scene>(furnace(albedo, maxDepth));
+  auto scene = std::make_shared<Scene>(whiteFurnace(albedo, maxDepth));
   const int renders = 16;
   std::vector<double> means[3];
   for (int k = 0; k < renders; ++k) {
@@ -342,7 +320,7 @@ std::pair<double, double> imageMeanPerSample(const BidirectionalTracer& tracer, 
 // answer, well below the 0.13% that an ambiguous winner costs.
 TEST(Furnace, BidirectionalWithEveryHeuristic) {
   const float albedo = 0.6f;
-  SceneDescription desc = furnace(albedo, 4);
+  SceneDescription desc = whiteFurnace(albedo, 4);
   Scene scene(desc);
   const double expected = 2.0 * (1 - std::pow(0.6, 4)) / (1 - 0.6);  // blue channel, Le = 2
   for (MisHeuristic h : {MisHeuristic::Balance, MisHeuristic::Power, MisHeuristic::Maximum}) {

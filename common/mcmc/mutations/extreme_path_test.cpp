@@ -10,29 +10,10 @@
 #include "common/mcmc/mlt_chain.h"
 #include "common/sampling/warp.h"
 #include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
 
 namespace farm {
 namespace {
-
-SceneDescription emittingSphere(float radius, float radiance) {
-  SceneDescription d;
-  d.camera.fovDegrees = 60;
-  d.camera.width = d.camera.height = 32;
-  d.maxDepth = 200;
-  BsdfDescription white;
-  white.reflectance = Spectrum(0.9f);
-  white.twoSided = true;
-  d.bsdfs.push_back(white);
-  ShapeDescription s;
-  s.type = ShapeDescription::Type::Sphere;
-  s.radius = radius;
-  s.flipNormals = true;
-  s.bsdf = 0;
-  s.isEmitter = true;
-  s.radiance = Spectrum(radiance, radiance * 0.5f, radiance * 0.25f);
-  d.shapes.push_back(s);
-  return d;
-}
 
 // A path of `bounces` surface vertices on the sphere, every edge inside it (so unoccluded), the
 // last one in front of the camera at the centre.
@@ -58,7 +39,7 @@ Path longPath(const Scene& scene, float radius, int bounces, Rng& rng) {
 
 TEST(ExtremePaths, HundredBouncesUnderABillionStayFinite) {
   for (float radius : {1.0f, 1e4f, 1e-4f}) {
-    Scene scene(emittingSphere(radius, 1e9f));
+    Scene scene(whiteFurnace(0.9f, 200, Spectrum(1e9f, 5e8f, 2.5e8f), 32, radius, Vec3f(0.0f)));
     MutationContext context{scene, 200};
     const BidirectionalMutation bidirectional(context);
     const LensSubpathMutation lensSubpath(context);

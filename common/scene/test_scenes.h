@@ -1,10 +1,41 @@
 #pragma once
-// Scenes the statistical tests of the Markov chains write for themselves (test code only).
+// Scenes the statistical tests write for themselves (test code only): the white furnace, with
+// its analytic answers, and a glass ball for the specular paths.
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "common/scene/scene_description.h"
+
 namespace farm {
+
+// A closed diffuse sphere of albedo `albedo` that emits `radiance` towards its inside, seen from
+// a 90-degree camera at the origin: radiance Le (1 - albedo^D) / (1 - albedo) everywhere for
+// paths of at most D edges, and a path of k edges carries Le albedo^(k-1).
+inline SceneDescription whiteFurnace(float albedo, int maxDepth,
+                                     Spectrum radiance = Spectrum(1.0f, 0.5f, 2.0f), int size = 24,
+                                     float radius = 1.5f,
+                                     Vec3f center = Vec3f(0.1f, -0.05f, 0.2f)) {
+  SceneDescription d;
+  d.camera.toWorld = Matrix4::identity();
+  d.camera.fovDegrees = 90;
+  d.camera.width = d.camera.height = size;
+  d.maxDepth = maxDepth;
+  BsdfDescription b;
+  b.reflectance = Spectrum(albedo);
+  b.twoSided = true;
+  d.bsdfs.push_back(b);
+  ShapeDescription s;
+  s.type = ShapeDescription::Type::Sphere;
+  s.center = center;
+  s.radius = radius;
+  s.flipNormals = true;  // emit towards the inside
+  s.bsdf = 0;
+  s.isEmitter = true;
+  s.radiance = radiance;
+  d.shapes.push_back(s);
+  return d;
+}
 
 // A floor seen obliquely from above, with a glass ball resting above it and a square light over
 // the ball that the camera does not see: paths E D L, E D S S L (the ball's caustic), E S S D L
