@@ -51,7 +51,9 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->etaSeconds = m.eta_seconds();
   p->workDone = m.work_done();
   p->plannedWork = m.planned_work();
-  p->rejectedSplats = m.rejected_splats();
+  p->rejected.nan = m.rejected_nan();
+  p->rejected.infinite = m.rejected_infinite();
+  p->rejected.negative = m.rejected_negative();
   for (const v1::MutationTally& t : m.tallies())
     p->tallies.push_back({t.name(), t.proposed(), t.accepted()});
   p->rays = m.rays();

@@ -42,6 +42,14 @@ std::string formatCount(double value) {
   return format("%.0f", value);
 }
 
+// "  rejected splats: 12 (NaN 10, infinite 2, negative 0)\n", or nothing when there are none.
+std::string rejectedLine(const JobProgress& p) {
+  if (p.rejected.total() == 0) return "";
+  return "  rejected splats: " + std::to_string(p.rejected.total()) + " (NaN " +
+         std::to_string(p.rejected.nan) + ", infinite " + std::to_string(p.rejected.infinite) +
+         ", negative " + std::to_string(p.rejected.negative) + ")\n";
+}
+
 // "  acceptance: bidir 12.3% of 1.2M, lens 64.0% of 3.4M\n", or nothing without tallies.
 std::string acceptanceLine(const JobProgress& p) {
   if (p.tallies.empty()) return "";
@@ -96,6 +104,7 @@ std::string statusText(const JobProgress& p) {
         << format("%.2f", p.bootstrapSeconds) << " s)\n";
   }
   out << acceptanceLine(p);
+  out << rejectedLine(p);
   if (!p.errorSeries.empty()) {
     const ErrorSample& e = p.errorSeries.back();
     out << "  error vs reference: rmse " << format("%.6g", e.rmse) << ", relMSE "
@@ -130,7 +139,10 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["chains_total"] = p.chainsTotal;
   j["chains_finished"] = p.chainsFinished;
   j["chains_leased"] = p.chainsLeased;
-  j["rejected_splats"] = p.rejectedSplats;
+  j["rejected_splats"] = {{"total", p.rejected.total()},
+                          {"nan", p.rejected.nan},
+                          {"infinite", p.rejected.infinite},
+                          {"negative", p.rejected.negative}};
   j["rays"] = p.rays;
   j["rays_per_second"] = p.raysPerSecond;
   j["has_reference"] = p.hasReference;
@@ -174,9 +186,7 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
       << "% of the total, rendering " << format("%.2f", p.renderSeconds) << " s)\n";
   out << "  rays: " << p.rays << " (" << formatCount(p.raysPerSecond)
       << " rays/s while rendering)\n";
-  if (p.rejectedSplats > 0) {
-    out << "  rejected splats (NaN, Inf or negative): " << p.rejectedSplats << "\n";
-  }
+  out << rejectedLine(p);
   out << acceptanceLine(p);
   if (!p.errorSeries.empty()) {
     const ErrorSample& e = p.errorSeries.back();

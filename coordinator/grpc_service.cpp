@@ -107,7 +107,10 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
     s->set_relmse(e.relMse);
   }
   m->set_error_series_total(p.errorSeriesTotal);
-  m->set_rejected_splats(p.rejectedSplats);
+  m->set_rejected_splats(p.rejected.total());
+  m->set_rejected_nan(p.rejected.nan);
+  m->set_rejected_infinite(p.rejected.infinite);
+  m->set_rejected_negative(p.rejected.negative);
   for (const MutationTally& t : p.tallies) {
     v1::MutationTally* tally = m->add_tallies();
     tally->set_name(t.name);
@@ -538,7 +541,15 @@ class WorkerService final : public v1::WorkerApi::Service {
     flush.mutations = header.mutations();
     flush.width = header.width();
     flush.height = header.height();
-    flush.rejectedSplats = header.rejected_splats();
+    flush.rejected.nan = header.rejected_nan();
+    flush.rejected.infinite = header.rejected_infinite();
+    flush.rejected.negative = header.rejected_negative();
+    if (header.rejected_splats() != flush.rejected.total()) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              "rejected_splats (" + std::to_string(header.rejected_splats()) +
+                  ") is not the sum of the rejected NaN, infinite and negative splats (" +
+                  std::to_string(flush.rejected.total()) + ")"};
+    }
     flush.rays = header.rays();
     flush.state = header.state();
     flush.finished = header.finished();

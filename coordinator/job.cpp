@@ -357,7 +357,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   if (renderStarted_) p.renderSeconds = secondsSince(*renderStarted_, now);
   if (aggregator_) {
     p.workDone = aggregator_->workDone();
-    p.rejectedSplats = aggregator_->rejectedSplats();
+    p.rejected = aggregator_->rejected();
     p.tallies = aggregator_->tallies();
     p.rays = aggregator_->rays();
     if (p.renderSeconds > 0) p.raysPerSecond = double(p.rays) / p.renderSeconds;

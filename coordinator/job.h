@@ -57,7 +57,8 @@ struct JobProgress {
   std::string jobId, name, error;
   JobPhase phase = JobPhase::kSubmitted;
   double fraction = 0, samplesPerSecond = 0, elapsedSeconds = 0, etaSeconds = -1;
-  int64_t workDone = 0, plannedWork = 0, rejectedSplats = 0;
+  int64_t workDone = 0, plannedWork = 0;
+  InvalidSplats rejected;              // splats dropped at the source, by cause
   int64_t rays = 0;                    // traced for the accepted work
   std::vector<MutationTally> tallies;  // proposals and acceptances by kind (Markov chains)
   double raysPerSecond = 0;

@@ -37,7 +37,8 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
           std::to_string(sums_.size()) + " values)";
     return FlushOutcome::kWrongSize;
   }
-  if (flush.mutations < 0 || flush.rejectedSplats < 0 || flush.rays < 0) {
+  if (flush.mutations < 0 || flush.rejected.nan < 0 || flush.rejected.infinite < 0 ||
+      flush.rejected.negative < 0 || flush.rays < 0) {
     why = name + " reports a negative count";
     return FlushOutcome::kBadValues;
   }
@@ -63,7 +64,7 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
   }
   for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(flush.splats[i]);
   workDone_ += flush.mutations;
-  rejectedSplats_ += flush.rejectedSplats;
+  rejected_ += flush.rejected;
   rays_ += flush.rays;
   for (const MutationTally& t : flush.tallies) {
     auto it = std::find_if(tallies_.begin(), tallies_.end(),

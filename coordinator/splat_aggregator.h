@@ -32,7 +32,7 @@ class SplatAggregator {
   // The summed splats (width*height*3), for RenderJob::resolve.
   const std::vector<double>& sums() const { return sums_; }
   int64_t workDone() const { return workDone_; }
-  int64_t rejectedSplats() const { return rejectedSplats_; }
+  const InvalidSplats& rejected() const { return rejected_; }
   int64_t rays() const { return rays_; }
   uint64_t acceptedFlushes() const { return acceptedFlushes_; }
   // Proposals and acceptances of the accepted flushes, by kind, in order of first appearance.
@@ -47,7 +47,7 @@ class SplatAggregator {
   std::vector<double> sums_;
   std::vector<uint32_t> nextFlush_;
   int64_t workDone_ = 0;
-  int64_t rejectedSplats_ = 0;
+  InvalidSplats rejected_;
   int64_t rays_ = 0;
   uint64_t acceptedFlushes_ = 0;
   std::vector<MutationTally> tallies_;

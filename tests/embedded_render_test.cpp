@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 namespace farm {
 namespace {
@@ -85,6 +87,42 @@ TEST(EmbeddedRender, MissingLightIsAClearError) {
   Status s = renderEmbedded(o, &result);
   EXPECT_FALSE(s.isOk());
   EXPECT_NE(s.message().find("/nonexistent/scene.xml"), std::string::npos) << s.message();
+}
+
+// A light too bright for float (3e38 per unit area, times the pixel count of the splat
+// convention): the splats that see it are infinite. They are counted by cause where they are
+// made and none reaches the image, which stays finite; the job's progress carries the counts.
+TEST(EmbeddedRender, InvalidSplatsAreCountedAndKeptOut) {
+  const std::string path = (std::filesystem::temp_directory_path() / "too-bright.xml").string();
+  std::ofstream(path) << R"(<?xml version="1.0"?>
+<scene version="0.5.0">
+  <sensor type="perspective">
+    <float name="fov" value="60"/>
+    <transform name="toWorld"><lookat origin="0, 3, -1" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/></film>
+  </sensor>
+  <shape type="rectangle">
+    <transform name="toWorld"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"/>
+  </shape>
+  <shape type="rectangle">
+    <transform name="toWorld"><scale value="0.5"/><rotate x="1" angle="-90"/>
+      <translate y="0.01"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0 0 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="3e38 3e38 3e38"/></emitter>
+  </shape>
+</scene>
+)";
+  EmbeddedRenderOptions o = options(Algorithm::PathTracing, 2, 1);
+  o.scenePath = path;
+  EmbeddedRenderResult result;
+  Status s = renderEmbedded(o, &result);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  EXPECT_GT(result.progress.rejected.infinite, 0);
+  EXPECT_EQ(result.progress.rejected.nan, 0);
+  EXPECT_EQ(result.progress.rejected.negative, 0);
+  for (float v : result.image.rgb) ASSERT_TRUE(std::isfinite(v) && v >= 0);
+  std::printf("infinite splats kept out: %lld\n", (long long)result.progress.rejected.infinite);
 }
 
 }  // namespace

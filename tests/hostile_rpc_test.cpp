@@ -176,6 +176,8 @@ class HostileRpcTest : public ::testing::Test {
     std::vector<float> splats;
     std::string state = "10";
     bool corruptChecksum = false;
+    int64_t rejectedTotal = 0, rejectedNan = 0, rejectedInfinite = 0, rejectedNegative = 0;
+    std::vector<std::tuple<std::string, int64_t, int64_t>> tallies;
   };
 
   grpc::Status upload(const Flush& f, v1::UploadFlushResponse* response) {
@@ -196,6 +198,16 @@ class HostileRpcTest : public ::testing::Test {
     h->set_width(f.width);
     h->set_height(f.height);
     h->set_state(f.state);
+    h->set_rejected_splats(f.rejectedTotal);
+    h->set_rejected_nan(f.rejectedNan);
+    h->set_rejected_infinite(f.rejectedInfinite);
+    h->set_rejected_negative(f.rejectedNegative);
+    for (const auto& [name, proposed, accepted] : f.tallies) {
+      v1::MutationTally* t = h->add_tallies();
+      t->set_name(name);
+      t->set_proposed(proposed);
+      t->set_accepted(accepted);
+    }
     h->set_splat_bytes(bytes.size());
     std::string checksum = sha256Hex(bytes + f.state);
     if (f.corruptChecksum) checksum[0] = checksum[0] == 'a' ? 'b' : 'a';
@@ -410,6 +422,8 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   flush.chain = chain;
   flush.epoch = job.lease.epoch();
   flush.splats.assign(16 * 16 * 3, 0.25f);
+  flush.rejectedTotal = flush.rejectedInfinite = 2;
+  flush.tallies = {{"small step", 4, 3}};
   v1::UploadFlushResponse response;
 
   Flush unknownChain = flush;
@@ -437,6 +451,14 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   later.flushIndex = 5;
   EXPECT_STATUS(upload(later, &response), FAILED_PRECONDITION, "arrived before flush 0");
 
+  Flush inconsistentCounts = flush;
+  inconsistentCounts.rejectedTotal = 5;
+  inconsistentCounts.rejectedNan = 1;
+  EXPECT_STATUS(upload(inconsistentCounts, &response), INVALID_ARGUMENT, "is not the sum");
+  Flush badTally = flush;
+  badTally.tallies = {{"lens", 3, 7}};
+  EXPECT_STATUS(upload(badTally, &response), INVALID_ARGUMENT, "malformed tally");
+
   // The same flush twice: accepted once, a duplicate the second time.
   ASSERT_TRUE(upload(flush, &response).ok());
   EXPECT_EQ(response.result(), v1::UploadFlushResponse::ACCEPTED);
@@ -447,6 +469,10 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   v1::JobProgress p = progress(job.jobId, &status);
   ASSERT_TRUE(status.ok());
   EXPECT_EQ(p.work_done(), flush.mutations) << "the duplicate must not count";
+  EXPECT_EQ(p.rejected_infinite(), 2) << "counts by cause, once";
+  EXPECT_EQ(p.rejected_splats(), 2);
+  ASSERT_EQ(p.tallies_size(), 1);
+  EXPECT_EQ(p.tallies(0).proposed(), 4);
 
   // Cancelling ends the job; later flushes are discarded and told to stop.
   EXPECT_EQ(cancel(job.jobId), v1::CANCELLED);

@@ -51,6 +51,9 @@ TEST(SplatAggregator, RejectsWhatDoesNotFitWithoutChangingTheSums) {
   ChainFlush negative = makeFlush(0, 0, 1.0f);
   negative.mutations = -1;
   EXPECT_EQ(sum.add(negative, &why), FlushOutcome::kBadValues);
+  ChainFlush negativeCount = makeFlush(0, 0, 1.0f);
+  negativeCount.rejected.nan = -3;
+  EXPECT_EQ(sum.add(negativeCount, &why), FlushOutcome::kBadValues);
   EXPECT_EQ(sum.workDone(), 0);
   for (double v : sum.sums()) EXPECT_EQ(v, 0.0);
   // The rejected flushes did not consume flush index 0.
@@ -88,6 +91,38 @@ TEST(SplatAggregator, TalliesCountOncePerAcceptedFlush) {
   EXPECT_EQ(sum.add(many, &why), FlushOutcome::kBadValues);
   EXPECT_EQ(sum.workDone(), 200);
   EXPECT_EQ(sum.tallies()[1].proposed, 12);
+}
+
+TEST(SplatAggregator, CountsRejectedSplatsByCause) {
+  SplatAggregator sum(2, 2, 2);
+  ChainFlush a = makeFlush(0, 0, 1.0f);
+  a.rejected.nan = 2;
+  a.rejected.negative = 1;
+  ChainFlush b = makeFlush(1, 0, 1.0f);
+  b.rejected.infinite = 5;
+  EXPECT_EQ(sum.add(a), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.add(a), FlushOutcome::kDuplicate);  // counted once
+  EXPECT_EQ(sum.add(b), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.rejected().nan, 2);
+  EXPECT_EQ(sum.rejected().infinite, 5);
+  EXPECT_EQ(sum.rejected().negative, 1);
+  EXPECT_EQ(sum.rejected().total(), 8);
+}
+
+// Where invalid splats are made they are told apart: NaN first, then infinity, then a negative
+// channel; valid values pass.
+TEST(InvalidSplats, ClassifiesByCause) {
+  InvalidSplats c;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_TRUE(c.check(Spectrum(1, 0, 2)));
+  EXPECT_FALSE(c.check(Spectrum(nan, inf, -1)));
+  EXPECT_FALSE(c.check(Spectrum(1, inf, -1)));
+  EXPECT_FALSE(c.check(Spectrum(0, -1e-9f, 1)));
+  EXPECT_FALSE(c.check(Spectrum(-inf, 0, 0)));
+  EXPECT_EQ(c.nan, 1);
+  EXPECT_EQ(c.infinite, 2);
+  EXPECT_EQ(c.negative, 1);
 }
 
 TEST(SplatAggregator, SumsInDoublePrecision) {

@@ -194,7 +194,10 @@ struct RemoteChainSource::Impl {
     header->set_mutations(flush.mutations);
     header->set_width(flush.width);
     header->set_height(flush.height);
-    header->set_rejected_splats(flush.rejectedSplats);
+    header->set_rejected_splats(flush.rejected.total());
+    header->set_rejected_nan(flush.rejected.nan);
+    header->set_rejected_infinite(flush.rejected.infinite);
+    header->set_rejected_negative(flush.rejected.negative);
     header->set_rays(flush.rays);
     header->set_state(flush.state);
     header->set_finished(flush.finished);

@@ -38,7 +38,7 @@ bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::s
   f.width = film_.width();
   f.height = film_.height();
   f.splats = film_.data();
-  f.rejectedSplats = rejected_;
+  f.rejected = rejected_;
   f.rays = int64_t(raysTraced - raysAtFlush_);
   f.state = state();
   f.finished = finished;
@@ -47,7 +47,7 @@ bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::s
   raysAtFlush_ = raysTraced;
   film_.clear();
   sinceFlush_ = 0;
-  rejected_ = 0;
+  rejected_ = InvalidSplats();
   return onFlush_(std::move(f));
 }
 

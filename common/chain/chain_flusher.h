@@ -23,8 +23,10 @@ class ChainFlusher {
                const std::atomic<bool>* cancel = nullptr);
 
   SplatBuffer& film() { return film_; }
-  // Splats dropped at the source (NaN, Inf or negative), reported with the next flush.
-  void rejectSplats(int64_t n = 1) { rejected_ += n; }
+  // Counts a splat that must not reach the image (NaN, infinite or negative) when `value` is
+  // one, reported with the next flush; true when the value is valid.
+  bool check(const Spectrum& value) { return rejected_.check(value); }
+  void reject(const InvalidSplats& counts) { rejected_ += counts; }
   // Mutations (or samples) done so far, resumed ones included.
   int64_t done() const { return done_; }
   // More to do: budget left and not cancelled.
@@ -44,7 +46,8 @@ class ChainFlusher {
   const std::function<bool(ChainFlush&&)>& onFlush_;
   const std::atomic<bool>* cancel_;
   SplatBuffer film_;
-  int64_t done_, sinceFlush_ = 0, rejected_ = 0, interval_;
+  int64_t done_, sinceFlush_ = 0, interval_;
+  InvalidSplats rejected_;
   uint32_t flushIndex_;
   uint64_t raysAtFlush_ = 0;
   std::vector<std::pair<const char*, MutationTally>> tallies_;

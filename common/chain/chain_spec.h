@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/chain/algorithm.h"
+#include "common/film/splat_buffer.h"
 
 namespace farm {
 
@@ -57,7 +58,7 @@ struct ChainFlush {
   int64_t mutations = 0;    // mutations (or samples) this flush covers
   int width = 0, height = 0;
   std::vector<float> splats;           // width*height*3, to be added (in double) to the chain sums
-  int64_t rejectedSplats = 0;          // NaN, Inf or negative splats dropped at the source
+  InvalidSplats rejected;              // NaN, infinite or negative splats dropped at the source
   int64_t rays = 0;                    // rays traced for this flush's work (for rays per second)
   std::string state;                   // chain state after this flush (resume with ChainSpec)
   std::vector<MutationTally> tallies;  // proposals and acceptances in this flush, by kind

@@ -2,6 +2,7 @@
 // A film that receives splats at continuous film positions and spreads each over the pixels of
 // the reconstruction filter. Filters are normalized (their weights over all pixels add up to
 // one), so a splat's total value is kept: what MLT's normalization by Z relies on.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -13,6 +14,30 @@ namespace farm {
 struct Splat {
   Vec2f film;      // pixels
   Spectrum value;  // already scaled to the estimator (see Camera for the A_px factor)
+};
+
+// Splat values that must not reach the image (Veach's estimators are finite and non-negative),
+// counted by cause where they are made, so that a job can say what went wrong and how often.
+struct InvalidSplats {
+  int64_t nan = 0;       // a NaN in any channel
+  int64_t infinite = 0;  // otherwise an infinity
+  int64_t negative = 0;  // otherwise a negative channel
+  int64_t total() const { return nan + infinite + negative; }
+  // Counts `value` when it is not a valid splat; true when it is valid.
+  bool check(const Spectrum& value) {
+    if (isValidRadiance(value)) return true;
+    if (std::isnan(value.x) || std::isnan(value.y) || std::isnan(value.z))
+      ++nan;
+    else if (!isFinite(value))
+      ++infinite;
+    else
+      ++negative;
+    return false;
+  }
+  InvalidSplats& operator+=(const InvalidSplats& o) {
+    nan += o.nan, infinite += o.infinite, negative += o.negative;
+    return *this;
+  }
 };
 
 class SplatBuffer {

@@ -23,7 +23,7 @@ double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, 
   Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
   RecordingSampler recorder(&rng);
   auto integrand = makePrimarySampleIntegrand(algorithm, scene, maxDepth);
-  int64_t rejected = 0;
+  InvalidSplats rejected;  // a candidate's invalid splats are simply not counted in I
   double sum = evaluateContribution(*integrand, recorder, &splats, &rejected);
   if (primarySamples) *primarySamples = recorder.values();
   return sum;

@@ -58,10 +58,7 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
     }
     IndependentSampler sampler(&rng);
     tracer.visitPaths(seedFilm, sampler, [&](const PathTracer::TracedPath& seed) {
-      if (!isValidRadiance(seed.value)) {
-        flusher.rejectSplats();
-        return;
-      }
+      if (!flusher.check(seed.value)) return;
       const double energy = luminance(seed.value);
       if (!(energy > 0)) return;
       x.vertices.clear();

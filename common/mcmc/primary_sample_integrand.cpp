@@ -93,16 +93,13 @@ std::unique_ptr<PrimarySampleIntegrand> makePrimarySampleIntegrand(Algorithm alg
 }
 
 double evaluateContribution(const PrimarySampleIntegrand& integrand, Sampler& sampler,
-                            std::vector<Splat>* splats, int64_t* rejected) {
+                            std::vector<Splat>* splats, InvalidSplats* rejected) {
   splats->clear();
   integrand.evaluate(sampler, splats);
   double sum = 0;
   size_t kept = 0;
   for (const Splat& s : *splats) {
-    if (!isValidRadiance(s.value)) {
-      ++*rejected;
-      continue;
-    }
+    if (!rejected->check(s.value)) continue;
     (*splats)[kept++] = s;
     sum += luminance(s.value);
   }

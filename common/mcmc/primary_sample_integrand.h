@@ -41,9 +41,9 @@ std::unique_ptr<PrimarySampleIntegrand> makePrimarySampleIntegrand(Algorithm alg
 Vec2f primarySampleFilmPoint(const Camera& camera, Sampler& sampler);
 
 // Evaluates the integrand and keeps only finite, non-negative splats; returns I, their total
-// luminance, and adds the number dropped to *rejected.
+// luminance, and counts those dropped in *rejected.
 double evaluateContribution(const PrimarySampleIntegrand& integrand, Sampler& sampler,
-                            std::vector<Splat>* splats, int64_t* rejected);
+                            std::vector<Splat>* splats, InvalidSplats* rejected);
 
 // Multiplexed MLT's choice of path length (in edges) from one uniform number: uniform over
 // 1..maxDepth when it is bounded; geometric with ratio kMultiplexedDepthRatio when unbounded,

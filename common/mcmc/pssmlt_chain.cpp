@@ -22,7 +22,7 @@ PrimarySampleSampler chainSampler(const ChainSpec& spec) {
 
 // Rebuilds the path of the sampler's current vector without mutating it; returns its I.
 double rebuildCurrentPath(const PrimarySampleIntegrand& integrand, PrimarySampleSampler& sampler,
-                          std::vector<Splat>* splats, int64_t* rejected) {
+                          std::vector<Splat>* splats, InvalidSplats* rejected) {
   sampler.setFrozen(true);
   sampler.startPath();
   double I = evaluateContribution(integrand, sampler, splats, rejected);
@@ -37,7 +37,7 @@ double seedContributionOf(const Scene& scene, const ChainSpec& spec) {
   PrimarySampleSampler sampler = chainSampler(spec);
   sampler.setSeed(spec.seedSample);
   std::vector<Splat> splats;
-  int64_t rejected = 0;
+  InvalidSplats rejected;
   return rebuildCurrentPath(*integrand, sampler, &splats, &rejected);
 }
 
@@ -64,7 +64,7 @@ void runPssmltChain(const Scene& scene, const PrimarySampleIntegrand& integrand,
     sampler.setSeed(spec.seedSample);
   }
 
-  int64_t rejected = 0;
+  InvalidSplats rejected;
   std::vector<Splat> current, proposed;
   double currentI = rebuildCurrentPath(integrand, sampler, &current, &rejected);
   if (!(currentI > 0)) {
@@ -74,12 +74,12 @@ void runPssmltChain(const Scene& scene, const PrimarySampleIntegrand& integrand,
 
   ChainFlusher flusher(spec, scene, onFlush, cancel);
   SplatBuffer& film = flusher.film();
-  flusher.rejectSplats(rejected);
+  flusher.reject(rejected);
   while (flusher.budgetLeft()) {
     sampler.startIteration();
-    int64_t dropped = 0;
+    InvalidSplats dropped;
     double proposedI = evaluateContribution(integrand, sampler, &proposed, &dropped);
-    flusher.rejectSplats(dropped);
+    flusher.reject(dropped);
     const double a = metropolisAcceptance(proposedI, currentI);
     if (a > 0) {
       float w = float(a / proposedI);

@@ -31,7 +31,7 @@ LocalRenderResult renderLocally(const RenderJob& job) {
         sum.accepted += t.accepted;
       }
       result.work += f.mutations;
-      result.rejectedSplats += f.rejectedSplats;
+      result.rejected += f.rejected;
       if (budget > 0) {
         double elapsed =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

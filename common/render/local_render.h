@@ -15,8 +15,8 @@ namespace farm {
 struct LocalRenderResult {
   Image image;
   BootstrapResult bootstrap;
-  int64_t work = 0;  // mutations or samples
-  int64_t rejectedSplats = 0;
+  int64_t work = 0;        // mutations or samples
+  InvalidSplats rejected;  // splats dropped at the source, by cause
   double seconds = 0;
   // Per chain (work unit), the sum of each channel over all its splats: the units are
   // independent, so their spread between two renders measures the variance of sums over the

@@ -51,7 +51,7 @@ void expectAgreement(const Case& c) {
     r[k] = renderLocally(job);
     ASSERT_EQ(r[k].image.width, ref.width);
     ASSERT_EQ(r[k].image.height, ref.height);
-    EXPECT_EQ(r[k].rejectedSplats, 0);
+    EXPECT_EQ(r[k].rejected.total(), 0);
   }
   Image avg(ref.width, ref.height);
   for (size_t i = 0; i < avg.rgb.size(); ++i) {

@@ -69,10 +69,7 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
     else
       bdpt.sample(p, sampler, &splats);
     for (const Splat& s : splats) {
-      if (isValidRadiance(s.value))
-        flusher.film().add(s.film, s.value);
-      else
-        flusher.rejectSplats();
+      if (flusher.check(s.value)) flusher.film().add(s.film, s.value);
     }
     const int64_t doneAfter = flusher.done() + 1;
     if (!flusher.countMutation(pt.rays() + bdpt.rays(),

@@ -65,7 +65,7 @@ void expectFurnace(Algorithm algorithm, int maxDepth) {
     EXPECT_NEAR(st.mean[c], expected, 4 * se + 1e-6 * expected)
         << algorithmName(algorithm) << " channel " << c << " maxDepth " << maxDepth;
   }
-  EXPECT_EQ(r.rejectedSplats, 0);
+  EXPECT_EQ(r.rejected.total(), 0);
 }
 
 TEST(Furnace, PathTracing) {
@@ -109,7 +109,7 @@ void expectFurnaceEnergyRedistribution(int maxDepth) {
     settings.bootstrapSamples = 1 << 14;
     RenderJob job(scene, settings, "furnace");
     LocalRenderResult r = renderLocally(job);
-    EXPECT_EQ(r.rejectedSplats, 0);
+    EXPECT_EQ(r.rejected.total(), 0);
     PixelStats st = pixelStats(r.image);
     for (int c = 0; c < 3; ++c) means[c].push_back(st.mean[c]);
   }
