@@ -7,6 +7,7 @@
 
 #include <atomic>
 
+#include "common/chain/resume_check.h"
 #include "common/mcmc/bootstrap.h"
 #include "common/mcmc/primary_sample_sampler.h"
 #include "common/render/render_job.h"
@@ -86,30 +87,10 @@ TEST(PssmltChain, ResumedChainContinuesExactly) {
   ChainSpec spec = job.planChains(boot)[1];
   spec.budget = 3000;
   spec.flushInterval = 1000;
-  std::vector<ChainFlush> whole;
-  job.runChain(spec, [&](ChainFlush&& f) {
-    whole.push_back(std::move(f));
-    return true;
-  });
+  std::vector<ChainFlush> whole = expectResumesExactly(
+      spec, 0, [&](const ChainSpec& c, const FlushSink& sink) { job.runChain(c, sink); });
   ASSERT_EQ(whole.size(), 3u);
   EXPECT_TRUE(whole.back().finished);
-
-  ChainSpec resumed = spec;
-  resumed.resumeState = whole[0].state;
-  resumed.resumeMutations = 1000;
-  resumed.resumeFlushIndex = 1;
-  std::vector<ChainFlush> rest;
-  job.runChain(resumed, [&](ChainFlush&& f) {
-    rest.push_back(std::move(f));
-    return true;
-  });
-  ASSERT_EQ(rest.size(), 2u);
-  for (int k = 0; k < 2; ++k) {
-    EXPECT_EQ(rest[k].flushIndex, whole[k + 1].flushIndex);
-    EXPECT_EQ(rest[k].mutations, whole[k + 1].mutations);
-    EXPECT_EQ(rest[k].splats, whole[k + 1].splats) << "flush " << k + 1;
-    EXPECT_EQ(rest[k].state, whole[k + 1].state);
-  }
 
   ChainSpec corrupt = spec;
   corrupt.resumeState = "garbage";
