@@ -81,7 +81,7 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
         deposit = energy / (length * kMaxErptChains);
       }
       for (int c = 0; c < chains; ++c) {
-        chain.start(x);
+        if (c > 0) chain.start(x);  // the first starts where the check above left it
         for (int i = 0; i < spec.erptLength; ++i) chain.step(rng, film, float(deposit), &flusher);
       }
     });

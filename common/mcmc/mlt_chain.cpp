@@ -53,14 +53,6 @@ double logAcceptanceRatio(const Mutation& mutation, const Path& x, const PathCon
   return std::isnan(logR) ? -INFINITY : logR;
 }
 
-bool mltChainPath(const std::string& state, const Scene& scene, std::string* pathBytes) {
-  Rng rng;
-  Path path;
-  if (!deserializeState(state, scene, &rng, &path)) return false;
-  *pathBytes = path.serialize();
-  return true;
-}
-
 PathChain::PathChain(const Scene& scene, int maxDepth, const MutationMix& mix)
     : scene_(scene),
       context_{scene, maxDepth},

@@ -72,7 +72,4 @@ double logAcceptanceRatio(const Mutation& mutation, const Path& x, const PathCon
                           const Path& y, const PathContribution& fy, const MutationRecord& record,
                           double selectX, double selectY);
 
-// The current path of a path-space chain's state (what its flush carries), for tests and tools.
-bool mltChainPath(const std::string& state, const Scene& scene, std::string* pathBytes);
-
 }  // namespace farm

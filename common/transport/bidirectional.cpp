@@ -307,20 +307,27 @@ void BidirectionalTracer::visitStrategies(
   if (int(lightPath.size()) < maxVertices + 1) lightPath.resize(maxVertices + 1);
   const int nCamera = traceCameraSubpath(film, sampler, maxVertices, true, cameraPath.data());
   const int nLight = traceLightSubpath(sampler, maxDepth_, true, lightPath.data());
-  const float pixelCount = scene_.camera().pixelCount();
+  StrategyPath path;
   for (int t = 1; t <= nCamera; ++t) {
     for (int s = 0; s <= nLight; ++s) {
       const int edges = s + t - 1;
       if (edges < 1 || edges > maxDepth_) continue;
       if (t == 1 && s == 0) continue;
-      Vec2f splatFilm = film;
-      Spectrum c = connect(lightPath.data(), cameraPath.data(), s, t, &splatFilm);
-      if (isBlack(c)) continue;
-      double w = misWeight(lightPath.data(), cameraPath.data(), s, t);
-      if (w <= 0) continue;
-      visit({lightPath.data(), s, cameraPath.data(), t, t == 1 ? c : c * pixelCount, w, splatFilm});
+      if (evaluateStrategy(lightPath.data(), s, cameraPath.data(), t, film, &path)) visit(path);
     }
   }
+}
+
+bool BidirectionalTracer::evaluateStrategy(const PathVertex* light, int s, const PathVertex* camera,
+                                           int t, const Vec2f& film, StrategyPath* out) const {
+  Vec2f splatFilm = film;
+  Spectrum c = connect(light, camera, s, t, &splatFilm);
+  if (isBlack(c)) return false;
+  double w = misWeight(light, camera, s, t);
+  if (w <= 0) return false;
+  // Camera strategies splat A_px times their value at the film point (see Camera).
+  *out = {light, s, camera, t, t == 1 ? c : c * scene_.camera().pixelCount(), w, splatFilm};
+  return true;
 }
 
 void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
@@ -345,16 +352,9 @@ void BidirectionalTracer::sampleStrategy(const Vec2f& film, Sampler& sampler, in
   if (int(lightPath.size()) < s + 1) lightPath.resize(s + 1);
   if (traceCameraSubpath(film, sampler, t, false, cameraPath.data()) < t) return;
   if (s > 0 && traceLightSubpath(sampler, s, false, lightPath.data()) < s) return;
-  Vec2f splatFilm = film;
-  Spectrum c = connect(lightPath.data(), cameraPath.data(), s, t, &splatFilm);
-  if (isBlack(c)) return;
-  double w = misWeight(lightPath.data(), cameraPath.data(), s, t);
-  if (w <= 0) return;
-  Spectrum value = c * float(w * scale);
-  if (t == 1)
-    splats->push_back({splatFilm, value});
-  else
-    splats->push_back({film, value * scene_.camera().pixelCount()});
+  StrategyPath path;
+  if (evaluateStrategy(lightPath.data(), s, cameraPath.data(), t, film, &path))
+    splats->push_back({path.film, path.unweighted * float(path.weight * scale)});
 }
 
 }  // namespace farm

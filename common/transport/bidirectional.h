@@ -61,6 +61,10 @@ class BidirectionalTracer {
   Spectrum connect(const PathVertex* light, const PathVertex* camera, int s, int t,
                    Vec2f* film) const;
   double misWeight(const PathVertex* light, const PathVertex* camera, int s, int t) const;
+  // Strategy (s, t) of the traced subpaths: its connection, MIS weight and splat scaling, as
+  // visitStrategies() reports it; false when it carries no light.
+  bool evaluateStrategy(const PathVertex* light, int s, const PathVertex* camera, int t,
+                        const Vec2f& film, StrategyPath* out) const;
 
   const Scene& scene_;
   int maxDepth_;
