@@ -138,6 +138,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   }
   const int chains = settings_.numChains > 0 ? settings_.numChains : kDefaultChains;
   std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
+  const std::vector<double>& contributions = c.contributions;
   const int maxDepth = resolvedMaxDepth(settings_, *scene_);
   for (size_t c = 0; c < picks.size(); ++c) {
     const int64_t i = picks[c];
@@ -145,10 +146,20 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
       // A path-space seed: one of the candidate's strategies, by its share of the luminance.
       Rng pick(settings_.seed, streamId(kPathSeedDomain, c));
       Path path;
-      if (!candidatePath(*scene_, maxDepth, settings_.seed, i, pick.nextDouble(), &path))
-        throw std::runtime_error("bootstrap candidate " + std::to_string(i) +
-                                 " carries light but builds no path: this host computes "
-                                 "differently from itself");
+      // A candidate whose light BDPT found through a film point within rounding of the film's
+      // edge may have no strategy path that projects back onto the film: f(x) = 0 there, so
+      // draw another (its share of Z is of the order of that rounding).
+      int64_t candidate = i;
+      for (int attempt = 0;
+           !candidatePath(*scene_, maxDepth, settings_.seed, candidate, pick.nextDouble(), &path);
+           ++attempt) {
+        if (attempt == 64)
+          throw std::runtime_error("bootstrap candidate " + std::to_string(candidate) +
+                                   " and 64 others carry light but build no path: this host "
+                                   "computes differently from itself");
+        const uint64_t hi = pick.nextUint(), lo = pick.nextUint();  // in this order
+        candidate = resampleSeeds(contributions, 1, (hi << 32) | lo)[0];
+      }
       result.seedPaths.push_back(path.serialize());
       result.seedContributions.push_back(
           std::exp(path.contribution(*scene_, maxDepth).logLuminance));

@@ -73,7 +73,7 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
     const ShapeDescription& s = desc_.shapes[i];
     int b = s.bsdf;
     shapeBsdf_[i] = (b >= 0 && b < int(desc_.bsdfs.size())) ? b : int(bsdfs_.size()) - 1;
-    float area = 0;
+    double area = 0;
     RTCGeometry geom;
     if (s.type == ShapeDescription::Type::Sphere) {
       geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
@@ -98,11 +98,12 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
           geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
       std::copy(s.indices.begin(), s.indices.begin() + 3 * nt, idx);
       if (s.isEmitter) {
-        std::vector<float>& cdf = triangleCdf_[i];
+        std::vector<double>& cdf = triangleCdf_[i];
         cdf.reserve(nt);
         for (size_t t = 0; t < nt; ++t) {
-          area += triangleArea(s.positions[s.indices[3 * t]], s.positions[s.indices[3 * t + 1]],
-                               s.positions[s.indices[3 * t + 2]]);
+          area +=
+              double(triangleArea(s.positions[s.indices[3 * t]], s.positions[s.indices[3 * t + 1]],
+                                  s.positions[s.indices[3 * t + 2]]));
           cdf.push_back(area);
         }
       }
@@ -116,8 +117,8 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
       AreaLight light;
       light.shape = i;
       light.radiance = s.radiance;
-      light.area = area;
-      light.power = luminance(s.radiance) * area * kPi;
+      light.area = float(area);
+      light.power = float(double(luminance(s.radiance)) * area * kPi);
       shapeLight_[i] = int(lights_.size());
       lights_.push_back(light);
     }
@@ -127,9 +128,9 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
   if (n > 0) extent_ = std::max(1e-6f, 0.5f * length(hi - lo));
   if (!std::isfinite(extent_)) extent_ = 1;
 
-  float total = 0;
+  double total = 0;
   for (const AreaLight& l : lights_) {
-    total += l.power;
+    total += double(l.power);
     lightCdf_.push_back(total);
   }
 }
@@ -181,10 +182,12 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
     hit->ng = s.flipNormals ? -n : n;
     hit->ns = hit->ng;
   } else {
-    const uint32_t* tri = &s.indices[3 * size_t(rh.hit.primID)];
-    const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
     float u = rh.hit.u, v = rh.hit.v;
-    hit->p = a * (1 - u - v) + b * u + c * v;  // barycentric: more accurate than o + t d
+    // Along the ray rather than by the barycentrics: a point interpolated between the vertices
+    // carries their rounding (1e-4 on a ground plane a few thousand units wide), enough to move
+    // a grazing hit's direction to the camera off the pixel it was traced through; o + t d errs
+    // only by the rounding of t, along the ray. The spawn offsets cover either.
+    hit->p = r.o + r.d * rh.ray.tfar;
     if (!triangleNormals(s, rh.hit.primID, 1 - u - v, u, v, &hit->ng, &hit->ns)) return false;
   }
   return true;
@@ -202,7 +205,9 @@ bool Scene::visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec
   ray.org_x = o.x, ray.org_y = o.y, ray.org_z = o.z;
   ray.dir_x = dir.x, ray.dir_y = dir.y, ray.dir_z = dir.z;
   ray.tnear = 0;
-  ray.tfar = 1.0f - 1e-4f;
+  // The whole segment between the offset end points: trimming it by a fraction of its length
+  // as well would let light through occluders near the far end of long rays.
+  ray.tfar = 1.0f;
   ray.mask = 0xFFFFFFFFu;
   ray.flags = 0;
   ray.time = 0;
@@ -212,17 +217,30 @@ bool Scene::visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec
 
 int Scene::pickLight(float u, float* pdf) const {
   if (lights_.empty()) return -1;
-  float total = lightCdf_.back();
-  float target = u * total;
+  const double total = lightCdf_.back();
+  const double target = double(u) * total;
   int i = int(std::upper_bound(lightCdf_.begin(), lightCdf_.end(), target) - lightCdf_.begin());
   i = std::min(i, int(lights_.size()) - 1);
-  *pdf = lights_[i].power / total;
+  *pdf = float(double(lights_[i].power) / total);
   return i;
 }
 
 float Scene::lightPickPdf(int light) const {
   if (light < 0 || lights_.empty()) return 0;
-  return lights_[light].power / lightCdf_.back();
+  return float(double(lights_[light].power) / lightCdf_.back());
+}
+
+double Scene::lightPickProbability(int light) const {
+  if (light < 0 || light >= int(lights_.size())) return 0;
+  return (lightCdf_[light] - (light > 0 ? lightCdf_[light - 1] : 0.0)) / lightCdf_.back();
+}
+
+double Scene::trianglePickProbability(int light, uint32_t t) const {
+  if (light < 0 || light >= int(lights_.size())) return 0;
+  const std::vector<double>& cdf = triangleCdf_[lights_[light].shape];
+  if (cdf.empty()) return 1;  // a sphere: one primitive
+  if (t >= cdf.size()) return 0;
+  return (cdf[t] - (t > 0 ? cdf[t - 1] : 0.0)) / cdf.back();
 }
 
 void Scene::sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const {
@@ -234,8 +252,8 @@ void Scene::sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) co
     *n = s.flipNormals ? -d : d;
     return;
   }
-  const std::vector<float>& cdf = triangleCdf_[l.shape];
-  float target = u[0] * cdf.back();
+  const std::vector<double>& cdf = triangleCdf_[l.shape];
+  const double target = double(u[0]) * cdf.back();
   size_t t = std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin();
   t = std::min(t, cdf.size() - 1);
   const uint32_t* tri = &s.indices[3 * t];

@@ -68,6 +68,14 @@ class Scene {
   float lightPickPdf(int light) const;
   // Uniform point on the light; the area density is 1 / area.
   void sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const;
+  // The probability with which sampleLightPoint picks triangle t of a mesh light, as its CDF
+  // makes it: what the area density 1 / area assumes to be area(t) / area. The CDFs are summed
+  // in double so that this holds for 10^5 triangles of very different sizes (in float, a
+  // triangle smaller than a rounding step of the running sum would get probability 0 or twice
+  // its share).
+  double trianglePickProbability(int light, uint32_t t) const;
+  // The probability with which pickLight picks a light, as its CDF makes it.
+  double lightPickProbability(int light) const;
   Spectrum emitted(int light, const Vec3f& n, const Vec3f& w) const {
     return dot(n, w) > 0 ? lights_[light].radiance : Spectrum(0.0f);
   }
@@ -79,9 +87,9 @@ class Scene {
   Camera camera_;
   std::vector<Bsdf> bsdfs_;
   std::vector<int> shapeBsdf_, shapeLight_;
-  std::vector<std::vector<float>> triangleCdf_;  // per emitting mesh shape: area CDF
+  std::vector<std::vector<double>> triangleCdf_;  // per emitting mesh shape: area CDF
   std::vector<AreaLight> lights_;
-  std::vector<float> lightCdf_;
+  std::vector<double> lightCdf_;
   float extent_ = 1;
   void* device_ = nullptr;  // RTCDevice
   void* scene_ = nullptr;   // RTCScene
