@@ -50,6 +50,13 @@ std::string rejectedLine(const JobProgress& p) {
          ", negative " + std::to_string(p.rejected.negative) + ")\n";
 }
 
+// "  scene warning: FILE:LINE: ...\n" for each of the loader's warnings.
+std::string warningLines(const JobProgress& p) {
+  std::string s;
+  for (const std::string& w : p.warnings) s += "  scene warning: " + w + "\n";
+  return s;
+}
+
 // "  acceptance: bidir 12.3% of 1.2M, lens 64.0% of 3.4M\n", or nothing without tallies.
 std::string acceptanceLine(const JobProgress& p) {
   if (p.tallies.empty()) return "";
@@ -105,6 +112,7 @@ std::string statusText(const JobProgress& p) {
   }
   out << acceptanceLine(p);
   out << rejectedLine(p);
+  out << warningLines(p);
   if (!p.errorSeries.empty()) {
     const ErrorSample& e = p.errorSeries.back();
     out << "  error vs reference: rmse " << format("%.6g", e.rmse) << ", relMSE "
@@ -146,6 +154,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["rays"] = p.rays;
   j["rays_per_second"] = p.raysPerSecond;
   j["has_reference"] = p.hasReference;
+  j["warnings"] = p.warnings;
   nlohmann::json tallies = nlohmann::json::object();
   for (const MutationTally& t : p.tallies) {
     tallies[t.name] = {{"proposed", t.proposed},
@@ -188,6 +197,7 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
       << " rays/s while rendering)\n";
   out << rejectedLine(p);
   out << acceptanceLine(p);
+  out << warningLines(p);
   if (!p.errorSeries.empty()) {
     const ErrorSample& e = p.errorSeries.back();
     out << "  error vs " << referencePath << ": rmse " << format("%.6g", e.rmse) << ", relMSE "

@@ -117,6 +117,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
     tally->set_proposed(t.proposed);
     tally->set_accepted(t.accepted);
   }
+  for (const std::string& w : p.warnings) m->add_warnings(w);
   m->set_width(p.width);
   m->set_height(p.height);
   *m->mutable_settings() = farm::toProto(p.settings);

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "common/film/error_metrics.h"
+#include "common/scene/scene.h"
 #include "coordinator/progress_math.h"
 
 namespace farm {
@@ -84,6 +85,7 @@ void Job::prepare() {
     if (!setPhase(JobPhase::kLoadingScene)) return;
     const auto loadStart = SteadyClock::now();
     std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, spec_.settings);
+    for (const std::string& w : scene->description().warnings) log("scene warning: " + w);
     auto renderJob = std::make_shared<RenderJob>(scene, spec_.settings, id_);
     std::optional<Image> reference;
     if (!spec_.referencePath.empty()) {
@@ -105,6 +107,7 @@ void Job::prepare() {
       std::lock_guard<std::mutex> lock(mutex_);
       if (isTerminal(phase_)) return;
       loadSeconds_ = secondsSince(loadStart, SteadyClock::now());
+      warnings_ = scene->description().warnings;
       renderJob_ = renderJob;
       width_ = renderJob->width();
       height_ = renderJob->height();
@@ -348,6 +351,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   const SteadyClock::time_point now = endedAt_ ? *endedAt_ : SteadyClock::now();
   p.elapsedSeconds = secondsSince(submitted_, now);
   p.loadSeconds = loadSeconds_;
+  p.warnings = warnings_;
   p.bootstrapSeconds = bootstrap_.seconds;
   p.normalization = bootstrap_.normalization;
   p.normalizationStdError = bootstrap_.normalizationStdError;

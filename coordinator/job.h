@@ -61,6 +61,7 @@ struct JobProgress {
   InvalidSplats rejected;              // splats dropped at the source, by cause
   int64_t rays = 0;                    // traced for the accepted work
   std::vector<MutationTally> tallies;  // proposals and acceptances by kind (Markov chains)
+  std::vector<std::string> warnings;   // the scene loader's: what it left out or changed
   double raysPerSecond = 0;
   double normalization = 0, normalizationStdError = 0;
   double loadSeconds = 0, bootstrapSeconds = 0, renderSeconds = 0;
@@ -161,6 +162,7 @@ class Job {
   int64_t plannedWork_ = 0;
   int width_ = 0, height_ = 0;
   double loadSeconds_ = 0;
+  std::vector<std::string> warnings_;
   std::optional<SteadyClock::time_point> renderStarted_, endedAt_;
   std::vector<ErrorSample> errorSeries_;
   double metricsSeconds_ = 0;  // time spent computing error metrics, to keep it a small share

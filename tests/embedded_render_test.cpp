@@ -8,6 +8,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cli/render_report.h"
+#include "common/scene/stiff_scenes.h"
+
 namespace farm {
 namespace {
 
@@ -123,6 +126,23 @@ TEST(EmbeddedRender, InvalidSplatsAreCountedAndKeptOut) {
   EXPECT_EQ(result.progress.rejected.negative, 0);
   for (float v : result.image.rgb) ASSERT_TRUE(std::isfinite(v) && v >= 0);
   std::printf("infinite splats kept out: %lld\n", (long long)result.progress.rejected.infinite);
+}
+
+// Degenerate triangles are left out by the loader with a warning that reaches the job's progress
+// (so `farm status` and the final report) and the report's text.
+TEST(EmbeddedRender, SceneWarningsReachTheReport) {
+  EmbeddedRenderOptions o = options(Algorithm::PathTracing, 1, 1);
+  o.scenePath = stiff::furnaceBoxFile(true, 4);
+  o.settings.width = o.settings.height = 8;
+  EmbeddedRenderResult result;
+  Status s = renderEmbedded(o, &result);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  ASSERT_EQ(result.progress.warnings.size(), 1u);
+  EXPECT_NE(result.progress.warnings[0].find("5 degenerate triangles left out"), std::string::npos)
+      << result.progress.warnings[0];
+  EXPECT_NE(statusText(result.progress).find("scene warning: " + result.progress.warnings[0]),
+            std::string::npos)
+      << statusText(result.progress);
 }
 
 }  // namespace

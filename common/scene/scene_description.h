@@ -69,6 +69,8 @@ struct SceneDescription {
   int maxDepth = -1;                // longest path in edges, Mitsuba's convention; -1 = unbounded
   std::vector<BsdfDescription> bsdfs;
   std::vector<ShapeDescription> shapes;
+  // What the loader changed or left out, one line each ("FILE:LINE: ..."), for the user.
+  std::vector<std::string> warnings;
 };
 
 }  // namespace farm

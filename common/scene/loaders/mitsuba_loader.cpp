@@ -20,6 +20,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/scene/mesh_cleanup.h"
+
 namespace farm {
 
 namespace fs = std::filesystem;
@@ -992,7 +994,7 @@ class MitsubaLoader {
   }
 
   void loadObj(const pugi::xml_node& fileNode, const std::string& filename, const Matrix4& toWorld,
-               bool faceNormals, bool flip, ShapeDescription* shape) const {
+               bool faceNormals, bool flip, ShapeDescription* shape) {
     fs::path objPath(filename);
     if (objPath.is_relative()) objPath = dir_ / objPath;
     std::error_code ec;
@@ -1055,6 +1057,14 @@ class MitsubaLoader {
       if (!isFinite(shape->positions[i]))
         fail(fileNode, "OBJ '" + filename + "' has a non-finite vertex position");
     }
+    // Before the normals: a needle's normal is noise and would spoil its vertices' averages.
+    DegenerateTriangles degenerate = removeDegenerateTriangles(shape);
+    if (degenerate.total() > 0) {
+      scene_.warnings.push_back(formatMessage(path_, lineOf(fileNode),
+                                              "OBJ '" + filename + "': " + describe(degenerate)));
+    }
+    if (shape->indices.empty())
+      fail(fileNode, "OBJ '" + filename + "' contains only degenerate triangles");
     bool normalsOk = fileNormals;
     if (fileNormals) {
       shape->normals.resize(sources.size());
