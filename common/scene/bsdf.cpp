@@ -56,6 +56,48 @@ Vec3f sampleMicrofacet(MicrofacetDistribution dist, float alpha, float u1, float
   return {sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta};
 }
 
+// Samples a GGX normal visible from w (w.z > 0) with density G1(w, m) max(0, w.m) D(m) / w.z
+// (Heitz 2018, "Sampling the GGX distribution of visible normals"): stretch w to the unit
+// roughness configuration, sample the projected hemisphere there, and unstretch the normal.
+Vec3f sampleVisibleGgx(float alpha, const Vec3f& w, float u1, float u2) {
+  const Vec3f v = normalize(Vec3f(alpha * w.x, alpha * w.y, w.z));
+  const float len2 = v.x * v.x + v.y * v.y;
+  const Vec3f t1 = len2 > 0 ? Vec3f(-v.y, v.x, 0) / std::sqrt(len2) : Vec3f(1, 0, 0);
+  const Vec3f t2 = cross(v, t1);
+  const float r = std::sqrt(u1), phi = 2 * kPi * u2;
+  const float p1 = r * std::cos(phi);
+  const float s = 0.5f * (1 + v.z);
+  const float p2 = (1 - s) * std::sqrt(std::max(0.0f, 1 - p1 * p1)) + s * r * std::sin(phi);
+  const Vec3f n = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0f, 1 - p1 * p1 - p2 * p2)) * v;
+  return normalize(Vec3f(alpha * n.x, alpha * n.y, std::max(1e-7f, n.z)));
+}
+
+// The microfacet normal a BSDF samples for wo (of either side): GGX normals visible from wo,
+// Beckmann normals by D(m) cos(theta_m). Always m.z > 0.
+Vec3f sampleFacet(MicrofacetDistribution dist, float alpha, const Vec3f& wo, float u1, float u2) {
+  if (dist == MicrofacetDistribution::Beckmann) return sampleMicrofacet(dist, alpha, u1, u2);
+  return sampleVisibleGgx(alpha, wo.z > 0 ? wo : -wo, u1, u2);
+}
+
+// The density of sampleFacet's m (facing wo).
+float facetPdf(MicrofacetDistribution dist, float alpha, const Vec3f& wo, const Vec3f& m) {
+  const float d = microfacetD(dist, alpha, m);
+  if (dist == MicrofacetDistribution::Beckmann) return d * m.z;
+  return smithG1(dist, alpha, wo, m) * std::fabs(dot(wo, m)) * d / std::fabs(wo.z);
+}
+
+// What is left of f |cos(theta_i)| / pdf for a facet m sampled by sampleFacet, once D, the
+// Fresnel term (and, for refraction, the eta factors and Jacobians) cancel: G1(wo, m) G1(wi, m)
+// |wo.m| / (|wo.z| m.z) for Beckmann (Walter et al. 2007, eq. 41), and G1(wi, m) for visible
+// GGX normals. In closed form from m, so it stays exact where recomputing the half vector from
+// float directions would not (tiny alpha at grazing angles).
+float facetWeight(MicrofacetDistribution dist, float alpha, const Vec3f& wo, const Vec3f& wi,
+                  const Vec3f& m) {
+  if (dist == MicrofacetDistribution::GGX) return smithG1(dist, alpha, wi, m);
+  return smithG1(dist, alpha, wo, m) * smithG1(dist, alpha, wi, m) * std::fabs(dot(wo, m)) /
+         (std::fabs(wo.z) * m.z);
+}
+
 Vec3f reflect(const Vec3f& wo, const Vec3f& m) {
   return 2 * dot(wo, m) * m - wo;
 }
@@ -65,6 +107,39 @@ Vec3f reflect(const Vec3f& wo, const Vec3f& m) {
 Vec3f refracted(const Vec3f& wo, float etaTI, float cosT) {
   float side = wo.z > 0 ? 1.0f : -1.0f;
   return normalize(-wo / etaTI + Vec3f(0, 0, side * (std::fabs(wo.z) / etaTI - cosT)));
+}
+
+// Snell's law about a microfacet normal m (Walter et al. 2007, eq. 40): wo refracted through
+// the facet, with etaTI = eta_t / eta_i and cosT the refracted cosine to m (>= 0).
+Vec3f refractedAbout(const Vec3f& wo, const Vec3f& m, float etaTI, float cosT) {
+  const float c = dot(wo, m);
+  return normalize(-wo / etaTI + m * (c / etaTI - (c > 0 ? cosT : -cosT)));
+}
+
+// The indices of refraction on the sides of the interface that local directions point into.
+float sideIor(const BsdfDescription& d, const Vec3f& w) {
+  return w.z > 0 ? d.extIOR : d.intIOR;
+}
+
+// A rough dielectric's transmission at half vector m (Walter et al. 2007, eq. 16), from eta_o
+// on wo's side and eta_i on wi's: the generalized half vector, oriented to +z.
+Vec3f transmissionHalfVector(const Vec3f& wo, const Vec3f& wi, float etaO, float etaI) {
+  Vec3f h = -(etaO * wo + etaI * wi);
+  const float l = length(h);
+  if (!(l > 0)) return Vec3f(0.0f);
+  h = h / l;
+  return h.z < 0 ? -h : h;
+}
+
+// The Fresnel reflectance of a refraction whose two cosines are known (to the facet, each on its
+// own side, with that side's index): symmetric in the two sides, so a refraction and its
+// reverse get the same value, and well-conditioned near the critical angle, where recovering
+// the refracted cosine from the incident one loses the digits that 1 - F is made of.
+float fresnelOfRefraction(float cosA, float etaA, float cosB, float etaB) {
+  cosA = std::fabs(cosA), cosB = std::fabs(cosB);
+  const float rs = (etaA * cosA - etaB * cosB) / (etaA * cosA + etaB * cosB);
+  const float rp = (etaB * cosA - etaA * cosB) / (etaB * cosA + etaA * cosB);
+  return 0.5f * (rs * rs + rp * rp);
 }
 
 }  // namespace
@@ -111,15 +186,131 @@ bool Bsdf::isBlack() const {
   switch (type_) {
     case BsdfDescription::Type::Diffuse:
       return farm::isBlack(desc_.reflectance);
+    case BsdfDescription::Type::Conductor:
     case BsdfDescription::Type::RoughConductor:
       return farm::isBlack(desc_.specularReflectance);
     case BsdfDescription::Type::Dielectric:
+    case BsdfDescription::Type::RoughDielectric:
       return false;
   }
   return false;
 }
 
-Spectrum Bsdf::eval(const Vec3f& woIn, const Vec3f& wiIn, TransportMode) const {
+bool Bsdf::isDelta() const {
+  return type_ == BsdfDescription::Type::Dielectric || type_ == BsdfDescription::Type::Conductor;
+}
+
+Spectrum Bsdf::conductorFresnel(float cosThetaI) const {
+  return desc_.specularReflectance *
+         fresnelConductor(cosThetaI, desc_.eta / desc_.extEta, desc_.k / desc_.extEta);
+}
+
+// Walter et al. 2007: reflection (eq. 20) and transmission (eq. 21) through microfacets of a
+// dielectric interface. Eq. 21 is the radiance form, with eta_o^2 (wo's side) in the numerator;
+// the adjoint BSDF for importance, f*(wo, wi) = f(wi, wo), has eta_i^2 instead (Veach 1997,
+// eq. 5.14: f / eta_o^2 is symmetric).
+Spectrum Bsdf::roughDielectricEval(const Vec3f& wo, const Vec3f& wi, TransportMode mode) const {
+  if (wo.z == 0 || wi.z == 0) return Spectrum(0.0f);
+  const float eta = desc_.intIOR / desc_.extIOR;
+  const MicrofacetDistribution dist = desc_.distribution;
+  const float alpha = desc_.alpha;
+  float cosT;
+  if (wo.z * wi.z > 0) {
+    Vec3f h = wo + wi;
+    const float hl = length(h);
+    if (!(hl > 0)) return Spectrum(0.0f);
+    h = h / hl;
+    if (h.z < 0) h = -h;
+    const float d = microfacetD(dist, alpha, h);
+    if (d == 0) return Spectrum(0.0f);
+    const float g = smithG1(dist, alpha, wo, h) * smithG1(dist, alpha, wi, h);
+    const float f = fresnelDielectric(dot(wo, h), eta, &cosT);
+    return Spectrum(f * d * g / (4 * std::fabs(wo.z) * std::fabs(wi.z)));
+  }
+  const float etaO = sideIor(desc_, wo), etaI = sideIor(desc_, wi);
+  const Vec3f h = transmissionHalfVector(wo, wi, etaO, etaI);
+  const float woh = dot(wo, h), wih = dot(wi, h);
+  if (woh * wih >= 0) return Spectrum(0.0f);  // both on one side of the facet: no refraction
+  const float d = microfacetD(dist, alpha, h);
+  const float g = smithG1(dist, alpha, wo, h) * smithG1(dist, alpha, wi, h);
+  if (d == 0 || g == 0) return Spectrum(0.0f);
+  const float f = fresnelOfRefraction(woh, etaO, wih, etaI);
+  const float denom = etaO * woh + etaI * wih;
+  const float etaX = mode == TransportMode::Radiance ? etaO : etaI;
+  return Spectrum(std::fabs(woh * wih) * etaX * etaX * (1 - f) * d * g /
+                  (std::fabs(wo.z * wi.z) * denom * denom));
+}
+
+// The density of roughDielectricSample: a facet m with density D(m) cos(theta_m) facing wo, then
+// reflection with probability F(wo.m) (Jacobian 1 / (4 |wo.m|), eq. 14) or refraction
+// (Jacobian eta_i^2 |wi.m| / (eta_o wo.m + eta_i wi.m)^2, eq. 17).
+float Bsdf::roughDielectricPdf(const Vec3f& wo, const Vec3f& wi) const {
+  if (wo.z == 0 || wi.z == 0) return 0;
+  const float eta = desc_.intIOR / desc_.extIOR;
+  const MicrofacetDistribution dist = desc_.distribution;
+  float cosT;
+  if (wo.z * wi.z > 0) {
+    Vec3f h = wo + wi;
+    const float hl = length(h);
+    if (!(hl > 0)) return 0;
+    h = h / hl;
+    if (h.z < 0) h = -h;
+    const float woh = dot(wo, h);
+    if (woh * wo.z <= 0) return 0;  // sample() draws only facets that face wo
+    const float f = fresnelDielectric(woh, eta, &cosT);
+    return f * facetPdf(dist, desc_.alpha, wo, h) / (4 * std::fabs(woh));
+  }
+  const float etaO = sideIor(desc_, wo), etaI = sideIor(desc_, wi);
+  const Vec3f h = transmissionHalfVector(wo, wi, etaO, etaI);
+  const float woh = dot(wo, h), wih = dot(wi, h);
+  if (woh * wo.z <= 0 || wih * wi.z <= 0) return 0;
+  const float f = fresnelOfRefraction(woh, etaO, wih, etaI);
+  const float denom = etaO * woh + etaI * wih;
+  return (1 - f) * facetPdf(dist, desc_.alpha, wo, h) * etaI * etaI * std::fabs(wih) /
+         (denom * denom);
+}
+
+bool Bsdf::roughDielectricSample(const Vec3f& wo, const float u[3], TransportMode mode,
+                                 BsdfSample* out) const {
+  if (wo.z == 0) return false;
+  const float eta = desc_.intIOR / desc_.extIOR;
+  const MicrofacetDistribution dist = desc_.distribution;
+  const float alpha = desc_.alpha;
+  const Vec3f m = sampleFacet(dist, alpha, wo, u[1], u[2]);
+  const float woh = dot(wo, m);
+  if (woh * wo.z <= 0) return false;
+  float cosT;
+  const float f = fresnelDielectric(woh, eta, &cosT);
+  const float pm = facetPdf(dist, alpha, wo, m);
+  // As for the rough conductor, the weight f cos / pdf in closed form from m: D and the Fresnel
+  // choice cancel (facetWeight).
+  out->delta = false;
+  if (u[0] < f) {
+    const Vec3f wi = reflect(wo, m);
+    if (wi.z * wo.z <= 0) return false;
+    out->wi = wi;
+    out->pdf = f * pm / (4 * std::fabs(woh));
+    out->weight = Spectrum(facetWeight(dist, alpha, wo, wi, m));
+    return out->pdf > 0 && isValidRadiance(out->weight);
+  }
+  const float etaTI = woh > 0 ? eta : 1 / eta;  // transmitted side / incident side
+  const Vec3f wi = refractedAbout(wo, m, etaTI, cosT);
+  if (wi.z * wo.z >= 0) return false;
+  const float etaO = sideIor(desc_, wo), etaI = sideIor(desc_, wi);
+  const float wih = dot(wi, m);
+  const float denom = etaO * woh + etaI * wih;
+  out->wi = wi;
+  // The density as pdf() computes it (the choice above differs from it by rounding only).
+  out->pdf = (1 - fresnelOfRefraction(woh, etaO, wih, etaI)) * pm * etaI * etaI * std::fabs(wih) /
+             (denom * denom);
+  // Radiance is compressed by (eta_o / eta_i)^2 crossing into the denser side, importance not
+  // (as for the smooth dielectric).
+  const float scale = mode == TransportMode::Radiance ? (etaO * etaO) / (etaI * etaI) : 1.0f;
+  out->weight = Spectrum(scale * facetWeight(dist, alpha, wo, wi, m));
+  return out->pdf > 0 && isValidRadiance(out->weight);
+}
+
+Spectrum Bsdf::eval(const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) const {
   Vec3f wo = woIn, wi = wiIn;
   if (desc_.twoSided && wo.z < 0) {  // twosided: the back side behaves as the front
     wo.z = -wo.z;
@@ -139,10 +330,12 @@ Spectrum Bsdf::eval(const Vec3f& woIn, const Vec3f& wiIn, TransportMode) const {
       if (d == 0) return Spectrum(0.0f);
       float g = smithG1(desc_.distribution, desc_.alpha, wo, h) *
                 smithG1(desc_.distribution, desc_.alpha, wi, h);
-      Spectrum f = fresnelConductor(dot(wo, h), desc_.eta / desc_.extEta, desc_.k / desc_.extEta);
-      return desc_.specularReflectance * f * (d * g / (4 * wo.z * wi.z));
+      return conductorFresnel(dot(wo, h)) * (d * g / (4 * wo.z * wi.z));
     }
+    case BsdfDescription::Type::RoughDielectric:
+      return roughDielectricEval(wo, wi, mode);
     case BsdfDescription::Type::Dielectric:
+    case BsdfDescription::Type::Conductor:
       return Spectrum(0.0f);
   }
   return Spectrum(0.0f);
@@ -164,10 +357,13 @@ float Bsdf::pdf(const Vec3f& woIn, const Vec3f& wiIn) const {
       float hl = length(h);
       if (hl == 0) return 0;
       h = h / hl;
-      // density of m is D(m) cos(theta_m); the reflection Jacobian is 1 / (4 |wo.m|) (eq. 14)
-      return microfacetD(desc_.distribution, desc_.alpha, h) * h.z / (4 * absDot(wo, h));
+      // the facet's density (facetPdf); the reflection Jacobian is 1 / (4 |wo.m|) (eq. 14)
+      return facetPdf(desc_.distribution, desc_.alpha, wo, h) / (4 * absDot(wo, h));
     }
+    case BsdfDescription::Type::RoughDielectric:
+      return roughDielectricPdf(wo, wi);
     case BsdfDescription::Type::Dielectric:
+    case BsdfDescription::Type::Conductor:
       return 0;
   }
   return 0;
@@ -193,25 +389,30 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
     }
     case BsdfDescription::Type::RoughConductor: {
       if (wo.z <= 0) return false;
-      Vec3f m = sampleMicrofacet(desc_.distribution, desc_.alpha, u[1], u[2]);
-      float womDot = dot(wo, m);
+      const Vec3f m = sampleFacet(desc_.distribution, desc_.alpha, wo, u[1], u[2]);
+      const float womDot = dot(wo, m);
       if (womDot <= 0) return false;
-      Vec3f wi = reflect(wo, m);
+      const Vec3f wi = reflect(wo, m);
       if (wi.z <= 0) return false;
-      float pdf = microfacetD(desc_.distribution, desc_.alpha, m) * m.z / (4 * womDot);
+      const float pdf = facetPdf(desc_.distribution, desc_.alpha, wo, m) / (4 * womDot);
       if (!(pdf > 0)) return false;
-      // The weight f cos / pdf in closed form from the sampled normal m (Walter et al. 2007,
-      // eq. 38): D cancels, so it stays exact where recomputing the half vector from float
-      // directions would not (tiny alpha at grazing angles).
-      float g = smithG1(desc_.distribution, desc_.alpha, wo, m) *
-                smithG1(desc_.distribution, desc_.alpha, wi, m);
-      Spectrum fr = fresnelConductor(womDot, desc_.eta / desc_.extEta, desc_.k / desc_.extEta);
       out->wi = flipped ? Vec3f(wi.x, wi.y, -wi.z) : wi;
       out->pdf = pdf;
-      out->weight = desc_.specularReflectance * fr * (g * womDot / (wo.z * m.z));
+      out->weight =
+          conductorFresnel(womDot) * facetWeight(desc_.distribution, desc_.alpha, wo, wi, m);
       out->delta = false;
       return isValidRadiance(out->weight);
     }
+    case BsdfDescription::Type::Conductor: {
+      if (wo.z <= 0) return false;
+      out->wi = Vec3f(-wo.x, -wo.y, flipped ? -wo.z : wo.z);
+      out->pdf = 1;
+      out->weight = conductorFresnel(wo.z);
+      out->delta = true;
+      return true;
+    }
+    case BsdfDescription::Type::RoughDielectric:
+      return roughDielectricSample(wo, u, mode, out);
     case BsdfDescription::Type::Dielectric: {
       float eta = desc_.intIOR / desc_.extIOR;
       float cosI = wo.z, cosT;
@@ -237,6 +438,11 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
 }
 
 bool Bsdf::specularDirection(const Vec3f& wo, bool reflection, Vec3f* wi) const {
+  if (type_ == BsdfDescription::Type::Conductor) {
+    if (!reflection || !(wo.z > 0 || (desc_.twoSided && wo.z < 0))) return false;
+    *wi = Vec3f(-wo.x, -wo.y, wo.z);
+    return true;
+  }
   if (type_ != BsdfDescription::Type::Dielectric || wo.z == 0) return false;
   if (reflection) {
     *wi = Vec3f(-wo.x, -wo.y, wo.z);
@@ -250,6 +456,14 @@ bool Bsdf::specularDirection(const Vec3f& wo, bool reflection, Vec3f* wi) const 
 
 bool Bsdf::specularLobe(const Vec3f& wo, const Vec3f& wi, TransportMode mode, bool* reflection,
                         float* probability, Spectrum* value) const {
+  if (type_ == BsdfDescription::Type::Conductor) {
+    // One lobe, chosen always; its value is the Fresnel reflectance.
+    if (!(wo.z * wi.z > 0) || !(wo.z > 0 || desc_.twoSided)) return false;
+    *reflection = true;
+    *probability = 1;
+    *value = conductorFresnel(std::fabs(wo.z));
+    return !farm::isBlack(*value);
+  }
   if (type_ != BsdfDescription::Type::Dielectric || wo.z == 0) return false;
   const float eta = desc_.intIOR / desc_.extIOR;
   float cosT;

@@ -28,7 +28,8 @@ class Bsdf {
   // u: three uniform numbers (lobe choice, then 2D direction). False when no direction results.
   bool sample(const Vec3f& wo, const float u[3], TransportMode mode, BsdfSample* out) const;
 
-  bool isDelta() const { return type_ == BsdfDescription::Type::Dielectric; }
+  // Has only Dirac lobes (the smooth dielectric and conductor).
+  bool isDelta() const;
 
   // Dirac lobes, for the path-space mutations, which evaluate paths through specular vertices
   // by the coefficients of their delta functions (Veach 1997, 8.3.2).
@@ -50,6 +51,12 @@ class Bsdf {
   const BsdfDescription& description() const { return desc_; }
 
  private:
+  Spectrum conductorFresnel(float cosThetaI) const;  // times specularReflectance
+  Spectrum roughDielectricEval(const Vec3f& wo, const Vec3f& wi, TransportMode mode) const;
+  float roughDielectricPdf(const Vec3f& wo, const Vec3f& wi) const;
+  bool roughDielectricSample(const Vec3f& wo, const float u[3], TransportMode mode,
+                             BsdfSample* out) const;
+
   BsdfDescription desc_;
   BsdfDescription::Type type_;
 };

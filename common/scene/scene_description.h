@@ -27,19 +27,22 @@ struct CameraDescription {
 enum class MicrofacetDistribution { Beckmann, GGX };
 
 struct BsdfDescription {
-  enum class Type { Diffuse, Dielectric, RoughConductor };
+  // Mitsuba 0.6's diffuse, dielectric (smooth), conductor (smooth), roughconductor and
+  // roughdielectric.
+  enum class Type { Diffuse, Dielectric, Conductor, RoughConductor, RoughDielectric };
   Type type = Type::Diffuse;
-  std::string id;          // the XML id, or empty
-  bool twoSided = false;   // wrapped in Mitsuba's "twosided"
+  std::string id;         // the XML id, or empty
+  bool twoSided = false;  // wrapped in Mitsuba's "twosided"
   // diffuse
   Spectrum reflectance{0.5f};
-  // dielectric (smooth): interior and exterior indices of refraction
+  // dielectric and roughdielectric: interior and exterior indices of refraction
   float intIOR = 1.5046f, extIOR = 1.000277f;
-  // roughconductor
+  // roughconductor and roughdielectric
   MicrofacetDistribution distribution = MicrofacetDistribution::Beckmann;
   float alpha = 0.1f;
-  Spectrum eta{0.0f}, k{1.0f};     // complex index of refraction of the conductor
-  float extEta = 1.0f;             // index of the exterior medium
+  // conductor and roughconductor
+  Spectrum eta{0.0f}, k{1.0f};  // complex index of refraction of the conductor
+  float extEta = 1.0f;          // index of the exterior medium
   Spectrum specularReflectance{1.0f};
 };
 
@@ -48,25 +51,25 @@ struct ShapeDescription {
   Type type = Type::TriangleMesh;
   // TriangleMesh, world space
   std::vector<Vec3f> positions;
-  std::vector<Vec3f> normals;       // per vertex, may be empty (then geometric normals are used)
-  std::vector<uint32_t> indices;    // 3 per triangle
-  bool faceNormals = false;         // ignore vertex normals
+  std::vector<Vec3f> normals;     // per vertex, may be empty (then geometric normals are used)
+  std::vector<uint32_t> indices;  // 3 per triangle
+  bool faceNormals = false;       // ignore vertex normals
   // Sphere, world space
   Vec3f center;
   float radius = 1.0f;
   bool flipNormals = false;
   // Material and emission
-  int bsdf = -1;                    // index into SceneDescription::bsdfs
+  int bsdf = -1;  // index into SceneDescription::bsdfs
   bool isEmitter = false;
-  Spectrum radiance{0.0f};          // area emitter radiance (emits on the side the normal faces)
+  Spectrum radiance{0.0f};  // area emitter radiance (emits on the side the normal faces)
   // Where it came from, for messages
-  std::string origin;               // e.g. "scene.xml:42 (obj models/Mesh001.obj)"
+  std::string origin;  // e.g. "scene.xml:42 (obj models/Mesh001.obj)"
 };
 
 struct SceneDescription {
   std::string sourcePath;
   CameraDescription camera;
-  int maxDepth = -1;                // longest path in edges, Mitsuba's convention; -1 = unbounded
+  int maxDepth = -1;  // longest path in edges, Mitsuba's convention; -1 = unbounded
   std::vector<BsdfDescription> bsdfs;
   std::vector<ShapeDescription> shapes;
   // What the loader changed or left out, one line each ("FILE:LINE: ..."), for the user.

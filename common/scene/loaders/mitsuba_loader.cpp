@@ -707,6 +707,71 @@ class MitsubaLoader {
     return v;
   }
 
+  // intIOR and extIOR of a (rough) dielectric.
+  void parseDielectricIndex(PropertySet& props, BsdfDescription* b, const std::string& type) {
+    b->intIOR = float(getIor(props, "intIOR", 1.5046));
+    b->extIOR = float(getIor(props, "extIOR", 1.000277));
+    // The description has no slot for tinted glass: accept only Mitsuba's default of 1.
+    for (const char* name : {"specularReflectance", "specularTransmittance"}) {
+      pugi::xml_node n = props.take(name);
+      if (n && !(spectrumOf(n).x == 1 && spectrumOf(n).y == 1 && spectrumOf(n).z == 1))
+        fail(n, std::string(name) + " other than 1 is not supported for " + type);
+    }
+  }
+
+  // The microfacet distribution and its roughness, of roughconductor and roughdielectric.
+  void parseRoughness(const pugi::xml_node& node, PropertySet& props, BsdfDescription* b) {
+    pugi::xml_node distNode;
+    std::string dist = toLower(getString(props, "distribution", "beckmann", &distNode));
+    if (dist == "beckmann") {
+      b->distribution = MicrofacetDistribution::Beckmann;
+    } else if (dist == "ggx") {
+      b->distribution = MicrofacetDistribution::GGX;
+    } else {
+      fail(distNode, "unsupported microfacet distribution '" + dist + "' (beckmann or ggx)");
+    }
+    pugi::xml_node alphaNode = props.take("alpha");
+    pugi::xml_node alphaU = props.take("alphaU"), alphaV = props.take("alphaV");
+    double alpha = 0.1;
+    if (alphaNode && (alphaU || alphaV)) fail(alphaNode, "give either alpha or alphaU/alphaV");
+    auto readAlpha = [&](const pugi::xml_node& n) {
+      requireTag(n, {"float", "integer"});
+      return number(n, requireValue(n), "parameter '" + paramName(n) + "'");
+    };
+    if (alphaNode) {
+      alpha = readAlpha(alphaNode);
+    } else if (alphaU || alphaV) {
+      if (!alphaU || !alphaV) fail(alphaU ? alphaU : alphaV, "alphaU and alphaV go together");
+      double u = readAlpha(alphaU), v = readAlpha(alphaV);
+      if (u != v) fail(alphaU, "anisotropic roughness (alphaU != alphaV) is not supported");
+      alpha = u;
+    }
+    if (!(alpha > 0)) fail(alphaNode ? alphaNode : (alphaU ? alphaU : node), "alpha must be > 0");
+    // Below 1e-4 the microfacet distributions lose precision; such a surface is a mirror anyway.
+    b->alpha = float(std::max(alpha, 1e-4));
+    props.take("sampleVisible");  // a sampling choice, not a look
+  }
+
+  // The complex index of refraction of a (rough) conductor, and its reflectance scale.
+  void parseConductorIndex(PropertySet& props, BsdfDescription* b) {
+    pugi::xml_node materialNode;
+    std::string material = getString(props, "material", "Cu", &materialNode);
+    if (material == "Cu") {
+      b->eta = kCopperEta;
+      b->k = kCopperK;
+    } else if (toLower(material) == "none") {
+      b->eta = Spectrum(0.0f);
+      b->k = Spectrum(1.0f);
+    } else {
+      fail(materialNode, "conductor material '" + material +
+                             "' is not supported; give eta and k as <rgb> (or Cu, none)");
+    }
+    b->eta = getSpectrum(props, "eta", b->eta);
+    b->k = getSpectrum(props, "k", b->k);
+    b->extEta = float(getIor(props, "extEta", 1.0));
+    b->specularReflectance = getSpectrum(props, "specularReflectance", Spectrum(1.0f));
+  }
+
   BsdfDescription parseBsdf(const pugi::xml_node& node) {
     std::string type = node.attribute("type").as_string();
     std::vector<pugi::xml_node> nested;
@@ -728,7 +793,8 @@ class MitsubaLoader {
       } else {
         failUnknownElement(inner);
       }
-      if (b.type == BsdfDescription::Type::Dielectric) {
+      if (b.type == BsdfDescription::Type::Dielectric ||
+          b.type == BsdfDescription::Type::RoughDielectric) {
         // A dielectric's two sides differ by nature (the relative index flips): mirroring the
         // back onto the front would swap reflection and transmission with the wrong index.
         fail(node,
@@ -750,64 +816,22 @@ class MitsubaLoader {
       b.reflectance = getSpectrum(props, "reflectance", Spectrum(0.5f));
     } else if (type == "dielectric") {
       b.type = BsdfDescription::Type::Dielectric;
-      b.intIOR = float(getIor(props, "intIOR", 1.5046));
-      b.extIOR = float(getIor(props, "extIOR", 1.000277));
-      // The description has no slot for tinted glass: accept only Mitsuba's default of 1.
-      for (const char* name : {"specularReflectance", "specularTransmittance"}) {
-        pugi::xml_node n = props.take(name);
-        if (n && !(spectrumOf(n).x == 1 && spectrumOf(n).y == 1 && spectrumOf(n).z == 1))
-          fail(n, std::string(name) + " other than 1 is not supported for dielectric");
-      }
+      parseDielectricIndex(props, &b, "dielectric");
+    } else if (type == "conductor") {
+      b.type = BsdfDescription::Type::Conductor;
+      parseConductorIndex(props, &b);
     } else if (type == "roughconductor") {
       b.type = BsdfDescription::Type::RoughConductor;
-      pugi::xml_node distNode;
-      std::string dist = toLower(getString(props, "distribution", "beckmann", &distNode));
-      if (dist == "beckmann") {
-        b.distribution = MicrofacetDistribution::Beckmann;
-      } else if (dist == "ggx") {
-        b.distribution = MicrofacetDistribution::GGX;
-      } else {
-        fail(distNode, "unsupported microfacet distribution '" + dist + "' (beckmann or ggx)");
-      }
-      pugi::xml_node alphaNode = props.take("alpha");
-      pugi::xml_node alphaU = props.take("alphaU"), alphaV = props.take("alphaV");
-      double alpha = 0.1;
-      if (alphaNode && (alphaU || alphaV)) fail(alphaNode, "give either alpha or alphaU/alphaV");
-      auto readAlpha = [&](const pugi::xml_node& n) {
-        requireTag(n, {"float", "integer"});
-        return number(n, requireValue(n), "parameter '" + paramName(n) + "'");
-      };
-      if (alphaNode) {
-        alpha = readAlpha(alphaNode);
-      } else if (alphaU || alphaV) {
-        if (!alphaU || !alphaV) fail(alphaU ? alphaU : alphaV, "alphaU and alphaV go together");
-        double u = readAlpha(alphaU), v = readAlpha(alphaV);
-        if (u != v) fail(alphaU, "anisotropic roughness (alphaU != alphaV) is not supported");
-        alpha = u;
-      }
-      if (!(alpha > 0)) fail(alphaNode ? alphaNode : (alphaU ? alphaU : node), "alpha must be > 0");
-      // Below 1e-4 the microfacet distributions lose precision; such a surface is a mirror anyway.
-      b.alpha = float(std::max(alpha, 1e-4));
-      pugi::xml_node materialNode;
-      std::string material = getString(props, "material", "Cu", &materialNode);
-      if (material == "Cu") {
-        b.eta = kCopperEta;
-        b.k = kCopperK;
-      } else if (toLower(material) == "none") {
-        b.eta = Spectrum(0.0f);
-        b.k = Spectrum(1.0f);
-      } else {
-        fail(materialNode, "conductor material '" + material +
-                               "' is not supported; give eta and k as <rgb> (or Cu, none)");
-      }
-      b.eta = getSpectrum(props, "eta", b.eta);
-      b.k = getSpectrum(props, "k", b.k);
-      b.extEta = float(getIor(props, "extEta", 1.0));
-      b.specularReflectance = getSpectrum(props, "specularReflectance", Spectrum(1.0f));
-      props.take("sampleVisible");  // a sampling choice, not a look
+      parseRoughness(node, props, &b);
+      parseConductorIndex(props, &b);
+    } else if (type == "roughdielectric") {
+      b.type = BsdfDescription::Type::RoughDielectric;
+      parseRoughness(node, props, &b);
+      parseDielectricIndex(props, &b, "roughdielectric");
     } else {
       fail(node, "unknown or unsupported bsdf type '" + type +
-                     "' (supported: diffuse, twosided, dielectric, roughconductor)");
+                     "' (supported: diffuse, twosided, dielectric, roughdielectric, conductor, "
+                     "roughconductor)");
     }
     rejectUnused(props, what);
     return b;

@@ -430,6 +430,15 @@ TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
 <bsdf type="diffuse" id="d"><spectrum name="reflectance" value="0.25"/></bsdf>
 <bsdf type="diffuse" id="e"><float name="reflectance" value="0.75"/></bsdf>
 <bsdf type="diffuse" id="f"><rgb name="reflectance" value="0.1 0.2 0.3"/></bsdf>
+<bsdf type="conductor" id="m">
+  <string name="material" value="none"/><rgb name="specularReflectance" value="0.5 0.6 0.7"/>
+</bsdf>
+<bsdf type="conductor" id="n"><rgb name="eta" value="0.2 0.9 1.1"/><rgb name="k" value="3.9 2.4 2.1"/>
+  <float name="extEta" value="1.33"/></bsdf>
+<bsdf type="roughdielectric" id="r">
+  <float name="alpha" value="0.3"/><float name="intIOR" value="1.7"/>
+  <boolean name="sampleVisible" value="true"/>
+</bsdf>
 )"));
   SceneDescription s = loadMitsubaScene(xml);
   EXPECT_EQ(s.maxDepth, -1);
@@ -439,7 +448,7 @@ TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   EXPECT_EQ(s.camera.filter, FilterType::Box);
   expectNear(s.camera.toWorld.applyVector({0, 0, 1}), {0, 0, -1}, 1e-6f);
   expectNear(s.camera.toWorld.applyPoint({0, 0, 0}), {0, 0, 5}, 0);
-  ASSERT_EQ(s.bsdfs.size(), 6u);
+  ASSERT_EQ(s.bsdfs.size(), 9u);
   EXPECT_FLOAT_EQ(s.bsdfs[0].intIOR, 1.333f);
   EXPECT_FLOAT_EQ(s.bsdfs[0].extIOR, 1.000277f);
   EXPECT_EQ(s.bsdfs[1].distribution, MicrofacetDistribution::GGX);
@@ -451,6 +460,18 @@ TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   expectNear(s.bsdfs[3].reflectance, Vec3f(0.25f), 0);
   expectNear(s.bsdfs[4].reflectance, Vec3f(0.75f), 0);
   expectNear(s.bsdfs[5].reflectance, {0.1f, 0.2f, 0.3f}, 0);
+  EXPECT_EQ(s.bsdfs[6].type, BsdfDescription::Type::Conductor);
+  expectNear(s.bsdfs[6].eta, Vec3f(0.0f), 0);  // "none": a perfect mirror
+  expectNear(s.bsdfs[6].k, Vec3f(1.0f), 0);
+  expectNear(s.bsdfs[6].specularReflectance, {0.5f, 0.6f, 0.7f}, 0);
+  EXPECT_EQ(s.bsdfs[7].type, BsdfDescription::Type::Conductor);
+  expectNear(s.bsdfs[7].k, {3.9f, 2.4f, 2.1f}, 0);
+  EXPECT_FLOAT_EQ(s.bsdfs[7].extEta, 1.33f);
+  EXPECT_EQ(s.bsdfs[8].type, BsdfDescription::Type::RoughDielectric);
+  EXPECT_EQ(s.bsdfs[8].distribution, MicrofacetDistribution::Beckmann);  // Mitsuba's default
+  EXPECT_FLOAT_EQ(s.bsdfs[8].alpha, 0.3f);
+  EXPECT_FLOAT_EQ(s.bsdfs[8].intIOR, 1.7f);
+  EXPECT_FLOAT_EQ(s.bsdfs[8].extIOR, 1.000277f);
 }
 
 // ---- Errors ----
@@ -563,6 +584,18 @@ TEST(MitsubaLoaderErrorTest, TwosidedDielectricIsRefused) {
                                   "<bsdf type=\"twosided\">\n<ref id=\"glass\"/></bsdf>\n")));
   EXPECT_NE(msg.find("b.xml:4:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("dielectric"), std::string::npos) << msg;
+  msg = loadError(dir.write(
+      "c.xml", sceneXml("<bsdf type=\"twosided\">\n<bsdf type=\"roughdielectric\"/></bsdf>\n")));
+  EXPECT_NE(msg.find("c.xml:3:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("twosided cannot wrap a dielectric"), std::string::npos) << msg;
+  // Tinted glass has no slot: refused, rough or smooth.
+  msg = loadError(dir.write("d.xml", sceneXml("<bsdf type=\"roughdielectric\">\n<rgb "
+                                              "name=\"specularTransmittance\" value=\"0.5 1 1\"/>"
+                                              "</bsdf>\n")));
+  EXPECT_NE(msg.find("d.xml:4: specularTransmittance other than 1 is not supported for "
+                     "roughdielectric"),
+            std::string::npos)
+      << msg;
 }
 
 TEST(MitsubaLoaderErrorTest, NonFiniteAndNonNumericParameters) {
