@@ -45,8 +45,9 @@ RenderSettings settingsFor(Algorithm a, double work, uint64_t seed) {
     s.samplesPerPixel = int64_t(std::ceil(8 * work));  // its pixels are the noisiest
     s.erptLength = 16;
   }
-  // The Markov chains' image means are Z's: their precision is the bootstrap's.
-  s.bootstrapSamples = int64_t(std::ceil(work)) << 13;
+  // The Markov chains' image means are Z's: their precision is the bootstrap's. A multiplexed
+  // candidate (one strategy of one length) is cheap and noisy: four times as many.
+  s.bootstrapSamples = int64_t(std::ceil(work)) << (a == Algorithm::MMLT ? 15 : 13);
   s.numChains = 16;
   return s;
 }
@@ -320,6 +321,67 @@ TEST(StiffSuite, NearlySealedLight) {
   r.sealedHole = 0.05f;
   r.plate = false;
   runCase({"nearly sealed light", stiff::room(r), 16, renderedAnswer(stiff::room(r), 64), 0.05});
+}
+
+// A metal plate on the floor in which the camera sees the ceiling, lit by a larger light (a
+// small one reflected onto the ceiling makes caustics seen in the mirror that only paths
+// hitting the light can carry).
+stiff::Room metalPlateRoom(BsdfDescription::Type type, float alpha) {
+  BsdfDescription metal;
+  metal.type = type;
+  metal.distribution = MicrofacetDistribution::GGX;
+  metal.alpha = alpha;
+  metal.eta = Spectrum(1.66f, 0.88f, 0.52f);  // gold, roughly: the Fresnel term varies with angle
+  metal.k = Spectrum(1.95f, 2.2f, 2.6f);
+  stiff::Room r;
+  r.plateBsdf = metal;
+  r.plateSize = 0.5f;
+  r.lightRadius = 0.25f;
+  return r;
+}
+
+// Roughness at its stiff end: a rough conductor at alpha 1e-4 renders as the smooth one.
+TEST(StiffSuite, RoughConductorAtTheStiffEnd) {
+  runCase({"rough metal a=1e-4",
+           stiff::room(metalPlateRoom(BsdfDescription::Type::RoughConductor, 1e-4f)), 4,
+           renderedAnswer(stiff::room(metalPlateRoom(BsdfDescription::Type::Conductor, 0)), 16)});
+}
+
+// Roughness from glossy to rough: every algorithm agrees with path tracing.
+TEST(StiffSuite, RoughConductorGlossyToRough) {
+  for (float alpha : {0.01f, 1.0f}) {
+    SceneDescription d = stiff::room(metalPlateRoom(BsdfDescription::Type::RoughConductor, alpha));
+    runCase({"rough metal a=" + std::to_string(alpha).substr(0, 4), d, 2,
+             renderedAnswer(d, 64, Algorithm::PathTracing)});
+  }
+}
+
+// A rough glass slab in the furnace: lossless at alpha 1e-4 (the furnace's answer); at alpha 1
+// microfacet shadowing loses light, and every algorithm agrees with path tracing.
+TEST(StiffSuite, RoughGlassInFurnace) {
+  runCase({"furnace rough glass 1e-4", stiff::glassInFurnace(1.5f, 16, 1e-4f), 2,
+           furnaceAnswer(stiff::kFurnaceLe, -1)});
+  SceneDescription rough = stiff::glassInFurnace(1.5f, 16, 1.0f);
+  runCase({"furnace rough glass 1", rough, 2, renderedAnswer(rough, 32, Algorithm::PathTracing)});
+}
+
+// A slab of index 1.0001 in front of the camera renders as no slab: every camera ray crosses
+// it, light-tracing strategies cannot reach the camera through it, and MIS must give its paths
+// to the strategies that can.
+TEST(StiffSuite, IndexMatchedSlab) {
+  stiff::Room slab, none;
+  slab.slabIor = 1.0001f;
+  // Unbounded paths: the slab adds two edges to every camera path.
+  runCase({"slab ior 1.0001", stiff::room(slab, 16, -1), 2,
+           renderedAnswer(stiff::room(none, 16, -1), 16)});
+}
+
+// A light half covered by a black plate 1e-4 below it: the image of the light's other half
+// alone. Shadow rays stopping a fraction of their length short of the light (1e-4 of about 2)
+// would miss the plate and let the covered half shine.
+TEST(StiffSuite, CoveredLight) {
+  runCase({"light covered 1e-4 below", stiff::coveredLightRoom(true), 2,
+           renderedAnswer(stiff::coveredLightRoom(false), 16)});
 }
 
 // No light at all (Z = 0): the path tracers render black, the algorithms that need Z refuse

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -157,10 +158,15 @@ inline SceneDescription tessellatedFurnace(int strips, int cells, int maxDepth, 
 // sees; paths unbounded, since every crossing of the glass takes edges. Seen from outside the
 // glass the radiance is the furnace's: the n^2 a beam gains on entering glass of index n it
 // loses on leaving (Veach 1997, sec. 5.2).
-inline SceneDescription glassInFurnace(float ior, int size = 16) {
+// With alpha > 0 the slab is a rough dielectric (GGX) instead: at alpha 1e-4 it is lossless
+// within noise, and the furnace's answer holds; rougher, microfacet shadowing loses light.
+inline SceneDescription glassInFurnace(float ior, int size = 16, float alpha = 0) {
   SceneDescription d = furnaceBox(1, -1, kFurnaceLe, size);
   BsdfDescription glass;
-  glass.type = BsdfDescription::Type::Dielectric;
+  glass.type =
+      alpha > 0 ? BsdfDescription::Type::RoughDielectric : BsdfDescription::Type::Dielectric;
+  glass.distribution = MicrofacetDistribution::GGX;
+  glass.alpha = alpha;
   glass.intIOR = ior;
   glass.extIOR = 1;
   d.bsdfs.push_back(glass);
@@ -237,6 +243,12 @@ struct Room {
   float plateGap = 0.01f;
   bool tiltedNormals = false;  // floor shading normals 50 degrees from the geometric normal
   float sealedHole = 0;        // > 0: the light inside a closed box with a hole of this side
+  // The plate's material, when not diffuse (a mirror, a rough metal); the camera sees the
+  // ceiling in it.
+  std::optional<BsdfDescription> plateBsdf;
+  float plateSize = 0.3f;  // half the plate's side
+  // > 0: a smooth glass slab of this index in front of the camera, filling its view.
+  float slabIor = 0;
 };
 
 // A 2 x 2 x 2 room (diffuse walls), a sphere light near the ceiling, a camera below it looking
@@ -275,10 +287,15 @@ inline SceneDescription room(const Room& r, int size = 16, int maxDepth = 4) {
   d.shapes.push_back(walls);
   if (r.plate) {
     ShapeDescription plate;
-    const float y = -1 + r.plateGap, a = 0.3f;
-    addQuad(&plate, Vec3f(-a, y, -a) * s, Vec3f(a, y, -a) * s, Vec3f(a, y, a) * s,
-            Vec3f(-a, y, a) * s, Vec3f(0, 1, 0) * s);
+    const float y = -1 + r.plateGap;
+    addQuad(&plate, Vec3f(-r.plateSize, y, -r.plateSize) * s,
+            Vec3f(r.plateSize, y, -r.plateSize) * s, Vec3f(r.plateSize, y, r.plateSize) * s,
+            Vec3f(-r.plateSize, y, r.plateSize) * s, Vec3f(0, 1, 0) * s);
     plate.bsdf = 2;
+    if (r.plateBsdf) {
+      d.bsdfs.push_back(*r.plateBsdf);
+      plate.bsdf = int(d.bsdfs.size()) - 1;
+    }
     d.shapes.push_back(plate);
   }
   const Vec3f lightCenter(0.2f, 0.7f, 0.1f);
@@ -304,6 +321,42 @@ inline SceneDescription room(const Room& r, int size = 16, int maxDepth = 4) {
     housing.bsdf = 2;
     d.shapes.push_back(housing);
   }
+  if (r.slabIor > 0) {
+    // A slab 0.05 thick across the camera's view, 0.15 in front of it: every camera ray crosses
+    // it, and no ray from the light to what the camera sees does.
+    BsdfDescription glass;
+    glass.type = BsdfDescription::Type::Dielectric;
+    glass.intIOR = r.slabIor;
+    glass.extIOR = 1;
+    d.bsdfs.push_back(glass);
+    const Matrix4& c = d.camera.toWorld;
+    const Vec3f eye = Vec3f(c.m[0][3], c.m[1][3], c.m[2][3]) / s;  // at scale 1
+    const Vec3f forward = normalize(c.applyVector(Vec3f(0, 0, 1)));
+    const Vec3f right = normalize(c.applyVector(Vec3f(1, 0, 0)));
+    const Vec3f up = normalize(c.applyVector(Vec3f(0, 1, 0)));
+    ShapeDescription slab;
+    const Vec3f center = eye + forward * 0.175f;
+    const float half = 0.15f, depth = 0.025f;
+    const Vec3f corner[8] = {center + (-half * right - half * up - depth * forward),
+                             center + (half * right - half * up - depth * forward),
+                             center + (half * right + half * up - depth * forward),
+                             center + (-half * right + half * up - depth * forward),
+                             center + (-half * right - half * up + depth * forward),
+                             center + (half * right - half * up + depth * forward),
+                             center + (half * right + half * up + depth * forward),
+                             center + (-half * right + half * up + depth * forward)};
+    // Six faces facing away from the slab's centre (scaled with the room).
+    const int faces[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                             {3, 2, 6, 7}, {0, 3, 7, 4}, {1, 2, 6, 5}};
+    for (const auto& f : faces) {
+      const Vec3f a = corner[f[0]] * s, b = corner[f[1]] * s, cc = corner[f[2]] * s,
+                  e = corner[f[3]] * s;
+      const Vec3f mid = (a + b + cc + e) * 0.25f;
+      addQuad(&slab, a, b, cc, e, mid + (mid - center * s));
+    }
+    slab.bsdf = int(d.bsdfs.size()) - 1;
+    d.shapes.push_back(slab);
+  }
   ShapeDescription light;
   light.type = ShapeDescription::Type::Sphere;
   light.center = lightCenter * s;
@@ -313,6 +366,44 @@ inline SceneDescription room(const Room& r, int size = 16, int maxDepth = 4) {
   const float ratio = 0.05f / r.lightRadius;
   light.radiance = Spectrum(r.lightRadiance * ratio * ratio);
   d.shapes.push_back(light);
+  return d;
+}
+
+// A room lit by a square light on its ceiling (facing down), half of which a black plate covers
+// `gap` below it; with `coveredEmits` false, only the uncovered half emits. The two render alike
+// (the covered half's light escapes only through the slit, at grazing angles), unless shadow
+// rays stop short of the light by more than the gap.
+inline SceneDescription coveredLightRoom(bool coveredEmits, float gap = 1e-4f, int size = 16) {
+  Room r;
+  r.plate = false;
+  SceneDescription d = room(r, size);
+  d.shapes.pop_back();  // the sphere
+  const float y = 0.999f, a = 0.3f;
+  ShapeDescription open, covered, cover;
+  addQuad(&open, Vec3f(-a, y, -a), Vec3f(0, y, -a), Vec3f(0, y, a), Vec3f(-a, y, a),
+          Vec3f(0, -1, 0));
+  addQuad(&covered, Vec3f(0, y, -a), Vec3f(a, y, -a), Vec3f(a, y, a), Vec3f(0, y, a),
+          Vec3f(0, -1, 0));
+  // The cover overhangs the covered half by 0.01 on its three open sides.
+  const float c = y - gap, o = 0.01f;
+  addQuad(&cover, Vec3f(0, c, -a - o), Vec3f(a + o, c, -a - o), Vec3f(a + o, c, a + o),
+          Vec3f(0, c, a + o), Vec3f(0, -1, 0));
+  open.bsdf = covered.bsdf = 1;  // black
+  d.bsdfs.push_back(diffuse(0.0f, true));
+  cover.bsdf = int(d.bsdfs.size()) - 1;
+  for (ShapeDescription* light : {&open, &covered}) {
+    light->isEmitter = true;
+    light->radiance = Spectrum(20.0f);
+  }
+  d.shapes.push_back(open);
+  if (coveredEmits) {
+    d.shapes.push_back(covered);
+  } else {
+    covered.isEmitter = false;
+    covered.radiance = Spectrum(0.0f);
+    d.shapes.push_back(covered);
+  }
+  d.shapes.push_back(cover);
   return d;
 }
 
