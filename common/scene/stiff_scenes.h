@@ -369,6 +369,23 @@ inline SceneDescription room(const Room& r, int size = 16, int maxDepth = 4) {
   return d;
 }
 
+// A metal plate on the floor in which the camera sees the ceiling, lit by a larger light (a
+// small one reflected onto the ceiling makes caustics seen in the mirror that only paths
+// hitting the light can carry).
+inline Room metalPlateRoom(BsdfDescription::Type type, float alpha) {
+  BsdfDescription metal;
+  metal.type = type;
+  metal.distribution = MicrofacetDistribution::GGX;
+  metal.alpha = alpha;
+  metal.eta = Spectrum(1.66f, 0.88f, 0.52f);  // gold, roughly: the Fresnel term varies with angle
+  metal.k = Spectrum(1.95f, 2.2f, 2.6f);
+  Room r;
+  r.plateBsdf = metal;
+  r.plateSize = 0.5f;
+  r.lightRadius = 0.25f;
+  return r;
+}
+
 // A room lit by a square light on its ceiling (facing down), half of which a black plate covers
 // `gap` below it; with `coveredEmits` false, only the uncovered half emits. The two render alike
 // (the covered half's light escapes only through the slit, at grazing angles), unless shadow
