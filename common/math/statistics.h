@@ -4,7 +4,9 @@
 // distribution's
 // (Wilson and Hilferty 1931: (X/k)^(1/3) is nearly normal; a few per cent from the exact
 // quantile at k >= 10, on the safe side in the upper tail).
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace farm {
 
@@ -46,6 +48,27 @@ inline double chiSquareQuantile(double k, double alpha) {
   double h = 2 / (9 * k);
   double t = 1 - h + z * std::sqrt(h);
   return k * t * t * t;
+}
+
+// The mean of independent, identically distributed estimates and its standard error: the
+// sample standard deviation (n - 1 in the denominator) over sqrt(n). From the estimates' own
+// spread, never from their distance to an expected value.
+struct MeanEstimate {
+  double mean = 0, standardError = 0;
+};
+
+inline MeanEstimate meanOfIndependent(const std::vector<double>& x) {
+  MeanEstimate e;
+  const double n = double(x.size());
+  if (x.empty()) return e;
+  double sum = 0;
+  for (double v : x) sum += v;
+  e.mean = sum / n;
+  if (x.size() < 2) return e;
+  double squares = 0;  // about the mean, not sum(x^2) - n mean^2: no cancellation
+  for (double v : x) squares += (v - e.mean) * (v - e.mean);
+  e.standardError = std::sqrt(squares / (n - 1) / n);
+  return e;
 }
 
 }  // namespace farm

@@ -314,13 +314,13 @@ void expectStationary(const Scene& scene, const ResampledTarget& target, const S
   double worst = 0;
   int worstBlock = -1;
   for (int b = 0; b < blocks; ++b) {
-    double sum = 0, sumSq = 0;
-    for (const auto& s : shares) sum += s[b], sumSq += s[b] * s[b];
-    const double mean = sum / chains;
-    const double chainVar = std::max(0.0, (sumSq - chains * mean * mean) / (chains - 1)) / chains;
-    const double se = std::sqrt(chainVar + std::pow(target.shares.stdError[b], 2) +
-                                std::pow(expected.stdError[b], 2));
-    const double z = std::fabs(mean - expected.mean[b]) / se;
+    std::vector<double> ofChains;
+    for (const auto& s : shares) ofChains.push_back(s[b]);
+    const MeanEstimate chainMean = meanOfIndependent(ofChains);
+    const double se =
+        std::sqrt(std::pow(chainMean.standardError, 2) + std::pow(target.shares.stdError[b], 2) +
+                  std::pow(expected.stdError[b], 2));
+    const double z = std::fabs(chainMean.mean - expected.mean[b]) / se;
     if (z > worst) worst = z, worstBlock = b;
   }
   if (getenv("SHARES_DEBUG")) {

@@ -84,7 +84,7 @@ struct Outcome {
 Outcome renderStatistics(const std::shared_ptr<Scene>& scene, Algorithm a, double work,
                          uint64_t seedBase) {
   Outcome o;
-  std::vector<double> sum(kStatistics, 0.0), sumSq(kStatistics, 0.0);
+  std::vector<std::vector<double>> perRender(kStatistics);
   for (int k = 0; k < kRenders; ++k) {
     RenderJob job(scene, settingsFor(a, work, seedBase + uint64_t(k)), "stiff");
     LocalRenderResult r = renderLocally(job);
@@ -92,16 +92,12 @@ Outcome renderStatistics(const std::shared_ptr<Scene>& scene, Algorithm a, doubl
     o.seconds += r.seconds;
     for (float v : r.image.rgb) o.badPixels += !(std::isfinite(v) && v >= 0);
     const std::vector<double> st = statistics(r.image);
-    for (int i = 0; i < kStatistics; ++i) {
-      sum[size_t(i)] += st[size_t(i)];
-      sumSq[size_t(i)] += st[size_t(i)] * st[size_t(i)];
-    }
+    for (int i = 0; i < kStatistics; ++i) perRender[size_t(i)].push_back(st[size_t(i)]);
   }
-  for (int i = 0; i < kStatistics; ++i) {
-    const double m = sum[size_t(i)] / kRenders;
-    const double var = std::max(0.0, (sumSq[size_t(i)] - kRenders * m * m) / (kRenders - 1));
-    o.mean.push_back(m);
-    o.se.push_back(std::sqrt(var / kRenders));
+  for (const std::vector<double>& x : perRender) {
+    const MeanEstimate e = meanOfIndependent(x);
+    o.mean.push_back(e.mean);
+    o.se.push_back(e.standardError);
   }
   return o;
 }

@@ -117,11 +117,9 @@ void expectFurnaceEnergyRedistribution(int maxDepth) {
   const double factor = (1 - std::pow(double(albedo), D)) / (1 - albedo);
   const double le[3] = {1.0, 0.5, 2.0};
   for (int c = 0; c < 3; ++c) {
-    double sum = 0, sumSq = 0;
-    for (double m : means[c]) sum += m, sumSq += m * m;
-    double mean = sum / renders;
-    double se = std::sqrt(std::max(0.0, (sumSq - renders * mean * mean) / (renders - 1)) / renders);
-    EXPECT_NEAR(mean, le[c] * factor, 5.2 * se) << "erpt channel " << c << " maxDepth " << maxDepth;
+    const MeanEstimate e = meanOfIndependent(means[c]);
+    EXPECT_NEAR(e.mean, le[c] * factor, 5.2 * e.standardError)
+        << "erpt channel " << c << " maxDepth " << maxDepth;
   }
 }
 
@@ -283,13 +281,9 @@ TEST(AnalyticIrradiance, EnergyRedistribution) {
         expected += pixelFootprintRadiance(cam, (b % 4) * side + x, (b / 4) * side + y, 8);
     }
     expected /= side * side;
-    double sum = 0, sumSq = 0;
-    for (double m : blockMeans[b]) sum += m, sumSq += m * m;
-    const double mean = sum / renders;
-    const double se =
-        std::sqrt(std::max(0.0, (sumSq - renders * mean * mean) / (renders - 1)) / renders);
+    const MeanEstimate e = meanOfIndependent(blockMeans[b]);
     // The 1e-3 covers the 8 x 8 quadrature of each footprint.
-    EXPECT_NEAR(mean, expected, bound * se + 1e-3 * expected) << "block " << b;
+    EXPECT_NEAR(e.mean, expected, bound * e.standardError + 1e-3 * expected) << "block " << b;
   }
 }
 
