@@ -242,6 +242,17 @@ TEST(StiffSuite, DegenerateTriangles) {
   runCase({"furnace degenerate tris", dirty, 1, furnaceAnswer(stiff::kFurnaceLe, 4)});
 }
 
+// The furnace from a binary PLY, through the loader and Open Asset Import Library: the same mesh
+// as the OBJ, and the furnace's answer.
+TEST(StiffSuite, FurnaceFromPly) {
+  SceneDescription obj = loadMitsubaScene(stiff::furnaceBoxFile(false, 4));
+  SceneDescription ply = loadMitsubaScene(stiff::furnaceBoxFile(false, 4, true));
+  ASSERT_EQ(ply.shapes.size(), 1u);
+  EXPECT_EQ(ply.shapes[0].indices.size(), obj.shapes[0].indices.size());
+  EXPECT_TRUE(ply.warnings.empty());
+  runCase({"furnace from ply", ply, 1, furnaceAnswer(stiff::kFurnaceLe, 4)});
+}
+
 // A floor lit by a sphere 100 radii away near its horizon (light arriving 1.2 degrees above
 // the floor) and seen from 0.5 degrees above it: rho Le r^2 cos(theta) / d^2, direct light.
 TEST(StiffSuite, GrazingFloor) {

@@ -435,15 +435,32 @@ inline SceneDescription unlitRoom(int size = 16) {
 
 // A furnace box written as Mitsuba XML with the walls in an OBJ file; with `degenerate`, the OBJ
 // also holds a repeated-vertex, a repeated-position, a collinear and a needle triangle on the
-// walls. Returns the XML's path.
-inline std::string furnaceBoxFile(bool degenerate, int maxDepth) {
+// walls; with `ply`, the walls are a binary PLY instead. Returns the XML's path.
+inline std::string furnaceBoxFile(bool degenerate, int maxDepth, bool ply = false) {
   namespace fs = std::filesystem;
-  const std::string dir =
-      (fs::temp_directory_path() / (degenerate ? "stiff_degenerate" : "stiff_clean")).string();
+  const std::string dir = (fs::temp_directory_path() /
+                           (ply ? "stiff_ply" : (degenerate ? "stiff_degenerate" : "stiff_clean")))
+                              .string();
   fs::create_directories(dir);
   SceneDescription d = furnaceBox(1, maxDepth);
   const ShapeDescription& walls = d.shapes[0];
-  {
+  if (ply) {
+    // Binary little-endian PLY (this machine's order), written byte for byte.
+    std::ofstream out(dir + "/walls.ply", std::ios::binary);
+    out << "ply\nformat binary_little_endian 1.0\nelement vertex " << walls.positions.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\nelement face "
+        << walls.indices.size() / 3 << "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const Vec3f& p : walls.positions)
+      out.write(reinterpret_cast<const char*>(&p.x), 3 * sizeof(float));
+    for (size_t t = 0; t < walls.indices.size(); t += 3) {
+      const unsigned char three = 3;
+      out.write(reinterpret_cast<const char*>(&three), 1);
+      for (int k = 0; k < 3; ++k) {
+        const int32_t i = int32_t(walls.indices[t + size_t(k)]);
+        out.write(reinterpret_cast<const char*>(&i), sizeof(i));
+      }
+    }
+  } else {
     std::ofstream obj(dir + "/walls.obj");
     obj.precision(9);
     for (const Vec3f& p : walls.positions) obj << "v " << p.x << " " << p.y << " " << p.z << "\n";
@@ -486,8 +503,9 @@ inline std::string furnaceBoxFile(bool degenerate, int maxDepth) {
       << "  <bsdf type=\"twosided\" id=\"wall\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" "
          "value=\""
       << kFurnaceAlbedo << "\"/></bsdf></bsdf>\n"
-      << "  <shape type=\"obj\"><string name=\"filename\" value=\"walls.obj\"/>"
-         "<boolean name=\"faceNormals\" value=\"true\"/><ref id=\"wall\"/>\n"
+      << "  <shape type=\"" << (ply ? "ply" : "obj") << "\"><string name=\"filename\" value=\""
+      << (ply ? "walls.ply" : "walls.obj")
+      << "\"/><boolean name=\"faceNormals\" value=\"true\"/><ref id=\"wall\"/>\n"
       << "    <emitter type=\"area\"><rgb name=\"radiance\" value=\"" << kFurnaceLe.x << " "
       << kFurnaceLe.y << " " << kFurnaceLe.z << "\"/></emitter>\n  </shape>\n</scene>\n";
   return dir + "/scene.xml";

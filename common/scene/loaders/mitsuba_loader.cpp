@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/scene/loaders/ply_reader.h"
 #include "common/scene/mesh_cleanup.h"
 
 namespace farm {
@@ -855,9 +856,9 @@ class MitsubaLoader {
 
   void parseShape(const pugi::xml_node& node) {
     std::string type = node.attribute("type").as_string();
-    if (type != "rectangle" && type != "cube" && type != "sphere" && type != "obj")
+    if (type != "rectangle" && type != "cube" && type != "sphere" && type != "obj" && type != "ply")
       fail(node, "unknown or unsupported shape type '" + type +
-                     "' (supported: rectangle, cube, sphere, obj)");
+                     "' (supported: rectangle, cube, sphere, obj, ply)");
     std::vector<pugi::xml_node> nested;
     PropertySet props = collectProperties(node, &nested);
     ShapeDescription shape;
@@ -939,13 +940,21 @@ class MitsubaLoader {
     } else {
       pugi::xml_node fileNode;
       std::string filename = getString(props, "filename", "", &fileNode);
-      if (!fileNode) fail(node, "obj shape without a filename parameter");
-      if (trim(filename).empty()) fail(fileNode, "empty obj filename");
+      if (!fileNode) fail(node, type + " shape without a filename parameter");
+      if (trim(filename).empty()) fail(fileNode, "empty " + type + " filename");
       bool faceNormals = getBoolean(props, "faceNormals", false);
-      getBoolean(props, "flipTexCoords", true);  // no textures, so texture coordinates are unused
-      getBoolean(props, "collapse", false);      // we always merge an OBJ's groups into one mesh
+      if (type == "obj") {
+        getBoolean(props, "flipTexCoords", true);  // no textures: texture coordinates are unused
+        getBoolean(props, "collapse", false);      // we always merge an OBJ's groups into one mesh
+      } else {
+        getBoolean(props, "srgb", true);  // vertex colours: no texture reads them
+      }
       rejectUnused(props, what);
-      loadObj(fileNode, filename, toWorld, faceNormals, flip, &shape);
+      if (type == "obj") {
+        loadObj(fileNode, filename, toWorld, faceNormals, flip, &shape);
+      } else {
+        loadPly(fileNode, filename, toWorld, faceNormals, flip, &shape);
+      }
       shape.origin = origin + " " + filename + ")";
     }
     scene_.shapes.push_back(std::move(shape));
@@ -1019,14 +1028,7 @@ class MitsubaLoader {
 
   void loadObj(const pugi::xml_node& fileNode, const std::string& filename, const Matrix4& toWorld,
                bool faceNormals, bool flip, ShapeDescription* shape) {
-    fs::path objPath(filename);
-    if (objPath.is_relative()) objPath = dir_ / objPath;
-    std::error_code ec;
-    if (!fs::exists(objPath, ec))
-      fail(fileNode,
-           "mesh file '" + filename + "' not found (looked for " + objPath.string() + ")");
-    if (!fs::is_regular_file(objPath, ec))
-      fail(fileNode, "mesh file '" + filename + "' is not a regular file");
+    const fs::path objPath = meshPath(fileNode, filename);
 
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
@@ -1073,33 +1075,82 @@ class MitsubaLoader {
       shape->indices.push_back(it->second);
     }
 
-    Matrix4 normalMatrix = toWorld.inverse().transpose();
-    shape->positions.resize(sources.size());
+    std::vector<Vec3f> positions(sources.size()), normals;
     for (size_t i = 0; i < sources.size(); ++i) {
       const float* p = &attrib.vertices[3 * size_t(sources[i].first)];
-      shape->positions[i] = toWorld.applyPoint(Vec3f(p[0], p[1], p[2]));
+      positions[i] = Vec3f(p[0], p[1], p[2]);
+    }
+    if (fileNormals) {
+      normals.resize(sources.size());
+      for (size_t i = 0; i < sources.size(); ++i) {
+        const float* n = &attrib.normals[3 * size_t(sources[i].second)];
+        normals[i] = Vec3f(n[0], n[1], n[2]);
+      }
+    }
+    finishMesh(fileNode, "OBJ '" + filename + "'", toWorld, faceNormals, flip, std::move(positions),
+               std::move(normals), shape);
+  }
+
+  // A PLY mesh through Open Asset Import Library (ply_reader.h).
+  void loadPly(const pugi::xml_node& fileNode, const std::string& filename, const Matrix4& toWorld,
+               bool faceNormals, bool flip, ShapeDescription* shape) {
+    const fs::path plyPath = meshPath(fileNode, filename);
+    PlyMesh mesh;
+    try {
+      mesh = readPly(plyPath.string());
+    } catch (const std::exception& e) {
+      fail(fileNode, "cannot read PLY '" + filename + "': " + e.what());
+    }
+    shape->indices = std::move(mesh.indices);
+    finishMesh(fileNode, "PLY '" + filename + "'", toWorld, faceNormals, flip,
+               std::move(mesh.positions), std::move(mesh.normals), shape);
+  }
+
+  // Where a mesh file named in the scene is: relative to the scene's folder; a clear error when
+  // it is missing or not a file.
+  fs::path meshPath(const pugi::xml_node& fileNode, const std::string& filename) const {
+    fs::path path(filename);
+    if (path.is_relative()) path = dir_ / path;
+    std::error_code ec;
+    if (!fs::exists(path, ec))
+      fail(fileNode, "mesh file '" + filename + "' not found (looked for " + path.string() + ")");
+    if (!fs::is_regular_file(path, ec))
+      fail(fileNode, "mesh file '" + filename + "' is not a regular file");
+    return path;
+  }
+
+  // What every mesh file goes through once read (`shape->indices` set, positions and normals in
+  // the file's coordinates, normals empty when the file has none): to world space, degenerate
+  // triangles out with a warning, the file's normals or Mitsuba's smooth ones (unless
+  // faceNormals), and flipNormals.
+  void finishMesh(const pugi::xml_node& fileNode, const std::string& what, const Matrix4& toWorld,
+                  bool faceNormals, bool flip, std::vector<Vec3f> positions,
+                  std::vector<Vec3f> normals, ShapeDescription* shape) {
+    Matrix4 normalMatrix = toWorld.inverse().transpose();
+    shape->positions.resize(positions.size());
+    for (size_t i = 0; i < positions.size(); ++i) {
+      shape->positions[i] = toWorld.applyPoint(positions[i]);
       if (!isFinite(shape->positions[i]))
-        fail(fileNode, "OBJ '" + filename + "' has a non-finite vertex position");
+        fail(fileNode, what + " has a non-finite vertex position");
     }
     // Before the normals: a needle's normal is noise and would spoil its vertices' averages.
     DegenerateTriangles degenerate = removeDegenerateTriangles(shape);
     if (degenerate.total() > 0) {
-      scene_.warnings.push_back(formatMessage(path_, lineOf(fileNode),
-                                              "OBJ '" + filename + "': " + describe(degenerate)));
+      scene_.warnings.push_back(
+          formatMessage(path_, lineOf(fileNode), what + ": " + describe(degenerate)));
     }
-    if (shape->indices.empty())
-      fail(fileNode, "OBJ '" + filename + "' contains only degenerate triangles");
-    bool normalsOk = fileNormals;
-    if (fileNormals) {
-      shape->normals.resize(sources.size());
-      for (size_t i = 0; i < sources.size() && normalsOk; ++i) {
-        const float* n = &attrib.normals[3 * size_t(sources[i].second)];
-        Vec3f w = normalMatrix.applyVector(Vec3f(n[0], n[1], n[2]));
+    if (shape->indices.empty()) fail(fileNode, what + " contains only degenerate triangles");
+    bool normalsOk = !faceNormals && normals.size() == positions.size();
+    if (normalsOk) {
+      shape->normals.resize(normals.size());
+      for (size_t i = 0; i < normals.size() && normalsOk; ++i) {
+        Vec3f w = normalMatrix.applyVector(normals[i]);
         float len = length(w);
         if (!(len > 0) || !std::isfinite(len)) normalsOk = false;  // fall back to computed ones
         shape->normals[i] = w / len;
       }
     }
+    if (!normalsOk) shape->normals.clear();
     if (!faceNormals && !normalsOk) computeSmoothNormals(shape);
     shape->faceNormals = faceNormals;
     if (flip) {

@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -474,6 +476,95 @@ TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   EXPECT_FLOAT_EQ(s.bsdfs[8].extIOR, 1.000277f);
 }
 
+// A PLY (ASCII, quads, per-vertex normals) loads as the OBJ of the same mesh: the same triangles
+// in world space (the quads split by Open Asset Import Library, corners in the file's winding),
+// normals transformed and normalized, flipNormals and faceNormals as for OBJ.
+TEST(MitsubaLoaderTest, PlyMeshEqualsTheObj) {
+  TempDir dir;
+  dir.write("quads.ply", R"(ply
+format ascii 1.0
+comment a unit square with leaning normals and a tilted one
+element vertex 8
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+element face 2
+property list uchar int vertex_indices
+end_header
+0 0 0 0.3 0 1
+1 0 0 0.3 0 1
+1 1 0 0.3 0 1
+0 1 0 0.3 0 1
+0 0 1 0 -1 1
+1 0 1 0 -1 1
+1 1 2 0 -1 1
+0 1 2 0 -1 1
+4 0 1 2 3
+4 4 5 6 7
+)");
+  dir.write("quads.obj",
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 2\nv 0 1 2\n"
+            "vn 0.2873479 0 0.9578263\nvn 0 -0.7071068 0.7071068\n"
+            "f 1//1 2//1 3//1 4//1\nf 5//2 6//2 7//2 8//2\n");
+  const std::string shape = R"(
+  <transform name="toWorld"><scale x="2"/><translate y="3"/></transform>
+</shape>
+)";
+  SceneDescription s = loadMitsubaScene(dir.write(
+      "s.xml",
+      sceneXml("<shape type=\"ply\"><string name=\"filename\" value=\"quads.ply\"/>" + shape +
+               "<shape type=\"obj\"><string name=\"filename\" value=\"quads.obj\"/>" + shape +
+               "<shape type=\"ply\"><string name=\"filename\" value=\"quads.ply\"/>"
+               "<boolean name=\"flipNormals\" value=\"true\"/>"
+               "<boolean name=\"faceNormals\" value=\"true\"/></shape>\n")));
+  ASSERT_EQ(s.shapes.size(), 3u);
+  const ShapeDescription &ply = s.shapes[0], &obj = s.shapes[1], &flipped = s.shapes[2];
+  ASSERT_EQ(ply.indices.size(), 12u);
+  ASSERT_EQ(obj.indices.size(), 12u);
+  EXPECT_EQ(ply.origin, "s.xml:3 (ply quads.ply)");
+  // The same corners (world-space positions with their normals) and the same surface: the
+  // quads may be split along either diagonal, so the triangles are compared by their total
+  // vector area, which is the same for both splits of a planar quad.
+  auto corners = [](const ShapeDescription& m) {
+    std::vector<std::array<float, 6>> c;
+    for (uint32_t i : m.indices) {
+      const Vec3f &p = m.positions[i], &n = m.normals[i];
+      c.push_back({p.x, p.y, p.z, n.x, n.y, n.z});
+    }
+    std::sort(c.begin(), c.end());
+    c.erase(std::unique(c.begin(), c.end()), c.end());
+    return c;
+  };
+  const auto a = corners(ply), b = corners(obj);
+  ASSERT_EQ(a.size(), 8u);
+  ASSERT_EQ(b.size(), 8u);
+  for (size_t v = 0; v < 8; ++v) {
+    for (int c = 0; c < 6; ++c) EXPECT_NEAR(a[v][c], b[v][c], 1e-6f) << v;
+  }
+  Vec3f areaPly(0.0f), areaObj(0.0f);
+  for (size_t t = 0; t < 4; ++t)
+    areaPly += triangleNormal(ply, t), areaObj += triangleNormal(obj, t);
+  expectNear(areaPly, areaObj, 1e-5f);
+  // Twice the vector areas, x scaled by 2: the flat square (0, 0, 2), the tilted one (0, -2, 2).
+  expectNear(areaPly, 2 * (Vec3f(0, 0, 2) + Vec3f(0, -2, 2)), 1e-5f);
+  // The first square, scaled by 2 in x and moved up 3: its normal stays +z; the tilted one's
+  // (0, -1, 1) / sqrt(2) is transformed by the inverse transpose (x scale: unchanged here).
+  for (size_t i = 0; i < ply.positions.size(); ++i) {
+    EXPECT_NEAR(length(ply.normals[i]), 1.0f, 1e-6f);
+    EXPECT_GE(ply.positions[i].y, 3.0f);
+  }
+  // flipNormals reverses the winding; faceNormals drops the vertex normals.
+  EXPECT_TRUE(flipped.faceNormals);
+  EXPECT_TRUE(flipped.normals.empty());
+  for (size_t t = 0; t < 4; ++t) {
+    Vec3f n = normalize(triangleNormal(flipped, t));
+    EXPECT_TRUE(n.z < 0) << t;
+  }
+}
+
 // ---- Errors ----
 
 TEST(MitsubaLoaderErrorTest, MissingFile) {
@@ -568,6 +659,44 @@ TEST(MitsubaLoaderErrorTest, UnknownTypesNameTypeAndLine) {
       sceneXml("<bsdf type=\"diffuse\">\n<float name=\"roughness\" value=\"0.1\"/></bsdf>\n")));
   EXPECT_NE(msg.find("i.xml:4:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("roughness"), std::string::npos) << msg;
+}
+
+// PLY files that cannot be read: missing (file and line of the shape), not PLY, truncated
+// binary, points only; each a clear error naming the file, nothing loaded.
+TEST(MitsubaLoaderErrorTest, BadPlyFiles) {
+  TempDir dir;
+  dir.write("garbage.ply", "this is not a mesh\n");
+  dir.write("truncated.ply",
+            "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+            "property float y\nproperty float z\nelement face 1\n"
+            "property list uchar int vertex_indices\nend_header\n\x01\x02");
+  dir.write("points.ply",
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+            "property float z\nend_header\n0 0 0\n1 1 1\n");
+  dir.write("badindex.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+            "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n");
+  auto load = [&](const std::string& file) {
+    return loadError(dir.write(
+        file + ".xml", sceneXml("<shape type=\"ply\">\n<string name=\"filename\" value=\"" + file +
+                                "\"/></shape>\n")));
+  };
+  std::string msg = load("nothere.ply");
+  EXPECT_NE(msg.find("nothere.ply.xml:4: mesh file 'nothere.ply' not found"), std::string::npos)
+      << msg;
+  for (const char* file : {"garbage.ply", "truncated.ply", "points.ply", "badindex.ply"}) {
+    msg = load(file);
+    EXPECT_NE(msg.find(std::string(":4: cannot read PLY '") + file + "': "), std::string::npos)
+        << msg;
+  }
+  msg = loadError(dir.write("noname.xml", sceneXml("<shape type=\"ply\"/>\n")));
+  EXPECT_NE(msg.find("noname.xml:3: ply shape without a filename parameter"), std::string::npos)
+      << msg;
+  msg = loadError(dir.write(
+      "unknown.xml", sceneXml("<shape type=\"ply\"><string name=\"filename\" value=\"x.ply\"/>\n"
+                              "<float name=\"maxSmoothAngle\" value=\"30\"/></shape>\n")));
+  EXPECT_NE(msg.find("maxSmoothAngle"), std::string::npos) << msg;
 }
 
 // A dielectric has two sides by nature (inside and outside differ by the relative index);

@@ -1,0 +1,23 @@
+#pragma once
+// PLY meshes (ASCII and binary, Stanford's format) through Open Asset Import Library: the
+// triangles of every mesh in the file, in the file's own coordinates, with per-vertex normals
+// where the file has them. Polygons are triangulated; points and lines are refused, as a mesh
+// made only of them has no surface to render.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/math/vec.h"
+
+namespace farm {
+
+struct PlyMesh {
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;     // one per position, or empty when the file has none
+  std::vector<uint32_t> indices;  // three per triangle
+};
+
+// Throws std::runtime_error with assimp's reason (or ours) when the file cannot be read.
+PlyMesh readPly(const std::string& path);
+
+}  // namespace farm
