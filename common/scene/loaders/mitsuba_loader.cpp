@@ -1106,12 +1106,21 @@ class MitsubaLoader {
                std::move(mesh.positions), std::move(mesh.normals), shape);
   }
 
-  // Where a mesh file named in the scene is: relative to the scene's folder; a clear error when
-  // it is missing or not a file.
+  // Where a mesh file named in the scene is: relative to the scene's folder and inside it; a
+  // clear error when it is elsewhere, missing or not a file. Inside, because the folder is what a
+  // farm submission uploads, and because a coordinator must not read its own files (an absolute
+  // path, or one climbing out with "..") for whoever submits a scene. Lexically, so a folder
+  // may hold symbolic links to its meshes.
   fs::path meshPath(const pugi::xml_node& fileNode, const std::string& filename) const {
-    fs::path path(filename);
-    if (path.is_relative()) path = dir_ / path;
+    fs::path named(filename);
     std::error_code ec;
+    const fs::path root = fs::absolute(dir_, ec).lexically_normal();
+    const fs::path path = (root / named).lexically_normal();
+    const fs::path inside = path.lexically_relative(root);
+    if (named.is_absolute() || inside.empty() || *inside.begin() == "..")
+      fail(fileNode, "mesh file '" + filename +
+                         "' is outside the scene's folder: meshes must be inside it (with a "
+                         "relative path), as a farm submission uploads that folder only");
     if (!fs::exists(path, ec))
       fail(fileNode, "mesh file '" + filename + "' not found (looked for " + path.string() + ")");
     if (!fs::is_regular_file(path, ec))

@@ -699,6 +699,31 @@ TEST(MitsubaLoaderErrorTest, BadPlyFiles) {
   EXPECT_NE(msg.find("maxSmoothAngle"), std::string::npos) << msg;
 }
 
+// Meshes outside the scene's folder are refused, however named: a farm submission uploads the
+// folder only, and a coordinator must not read its own files for a client. A path that climbs
+// out and back in is inside.
+TEST(MitsubaLoaderErrorTest, MeshesOutsideTheSceneFolderAreRefused) {
+  TempDir dir;
+  const std::string triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  dir.write("outside.obj", triangle);
+  dir.write("scene/models/inside.obj", triangle);
+  auto load = [&](const std::string& filename) {
+    return loadError(dir.write("scene/s.xml",
+                               sceneXml("<shape type=\"obj\">\n<string name=\"filename\" value=\"" +
+                                        filename + "\"/></shape>\n")));
+  };
+  for (const std::string& outside :
+       {std::string("../outside.obj"), std::string("models/../../outside.obj"),
+        (dir.path() / "outside.obj").string(), (dir.path() / "scene/models/inside.obj").string()}) {
+    const std::string msg = load(outside);
+    EXPECT_NE(msg.find("s.xml:4: mesh file '" + outside + "' is outside the scene's folder"),
+              std::string::npos)
+        << msg;
+  }
+  EXPECT_EQ(load("models/../models/inside.obj"), "");
+  EXPECT_EQ(load("./models/inside.obj"), "");
+}
+
 // A dielectric has two sides by nature (inside and outside differ by the relative index);
 // twosided would mirror the back side onto the front and swap reflection and transmission with
 // the wrong index. Mitsuba refuses the combination; so do we, with or without a <ref>.
