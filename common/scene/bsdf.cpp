@@ -241,7 +241,8 @@ Spectrum Bsdf::roughDielectricEval(const Vec3f& wo, const Vec3f& wi, TransportMo
                   (std::fabs(wo.z * wi.z) * denom * denom));
 }
 
-// The density of roughDielectricSample: a facet m with density D(m) cos(theta_m) facing wo, then
+// The density of roughDielectricSample: a facet m facing wo with sampleFacet's density
+// (facetPdf: visible normals for GGX, D(m) cos(theta_m) for Beckmann), then
 // reflection with probability F(wo.m) (Jacobian 1 / (4 |wo.m|), eq. 14) or refraction
 // (Jacobian eta_i^2 |wi.m| / (eta_o wo.m + eta_i wi.m)^2, eq. 17).
 float Bsdf::roughDielectricPdf(const Vec3f& wo, const Vec3f& wi) const {
@@ -409,7 +410,7 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
       out->pdf = 1;
       out->weight = conductorFresnel(wo.z);
       out->delta = true;
-      return true;
+      return !farm::isBlack(out->weight);  // as specularLobe(): no lobe carries nothing
     }
     case BsdfDescription::Type::RoughDielectric:
       return roughDielectricSample(wo, u, mode, out);

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <pugixml.hpp>
@@ -829,6 +830,11 @@ class MitsubaLoader {
       b.type = BsdfDescription::Type::RoughDielectric;
       parseRoughness(node, props, &b);
       parseDielectricIndex(props, &b, "roughdielectric");
+      // Equal indices refract nothing: every refraction goes straight through, where the
+      // microfacet transmission lobe is singular (its Jacobian's denominator vanishes).
+      if (b.intIOR == b.extIOR)
+        fail(node,
+             "roughdielectric with intIOR equal to extIOR does not refract; leave the surface out");
     } else {
       fail(node, "unknown or unsupported bsdf type '" + type +
                      "' (supported: diffuse, twosided, dielectric, roughdielectric, conductor, "
@@ -1033,9 +1039,13 @@ class MitsubaLoader {
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
     config.vertex_color = false;
-    config.mtl_search_path = objPath.parent_path().string();
+    // From memory, with no material library: tinyobj would open whatever file an `mtllib` line
+    // names (outside the scene's folder, or /dev/zero), and materials come from the XML anyway.
+    std::ifstream in(objPath, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) fail(fileNode, "cannot read OBJ '" + filename + "'");
     tinyobj::ObjReader reader;
-    if (!reader.ParseFromFile(objPath.string(), config)) {
+    if (!reader.ParseFromString(text, "", config)) {
       std::string err = reader.Error();
       while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
       fail(fileNode,
@@ -1115,12 +1125,13 @@ class MitsubaLoader {
     fs::path named(filename);
     std::error_code ec;
     const fs::path root = fs::absolute(dir_, ec).lexically_normal();
-    const fs::path path = (root / named).lexically_normal();
-    const fs::path inside = path.lexically_relative(root);
+    const fs::path inside = (root / named).lexically_normal().lexically_relative(root);
     if (named.is_absolute() || inside.empty() || *inside.begin() == "..")
       fail(fileNode, "mesh file '" + filename +
                          "' is outside the scene's folder: meshes must be inside it (with a "
                          "relative path), as a farm submission uploads that folder only");
+    // Named in messages as the scene names its folder, which the coordinator strips from them.
+    const fs::path path = dir_ / named;
     if (!fs::exists(path, ec))
       fail(fileNode, "mesh file '" + filename + "' not found (looked for " + path.string() + ")");
     if (!fs::is_regular_file(path, ec))

@@ -685,6 +685,17 @@ TEST(MitsubaLoaderErrorTest, BadPlyFiles) {
   std::string msg = load("nothere.ply");
   EXPECT_NE(msg.find("nothere.ply.xml:4: mesh file 'nothere.ply' not found"), std::string::npos)
       << msg;
+  // Only PLY reaches assimp: an OBJ, whatever its name, is not read by another importer (some
+  // open further files that the first one names).
+  dir.write("obj-inside.ply", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  for (const char* file : {"obj-inside.ply", "tri.obj"}) {
+    msg = load(file);
+    EXPECT_NE(msg.find(std::string(":4: cannot read PLY '") + file +
+                       "': not a PLY file (it does not start with the line 'ply')"),
+              std::string::npos)
+        << msg;
+  }
   for (const char* file : {"garbage.ply", "truncated.ply", "points.ply", "badindex.ply"}) {
     msg = load(file);
     EXPECT_NE(msg.find(std::string(":4: cannot read PLY '") + file + "': "), std::string::npos)
@@ -742,6 +753,13 @@ TEST(MitsubaLoaderErrorTest, TwosidedDielectricIsRefused) {
       "c.xml", sceneXml("<bsdf type=\"twosided\">\n<bsdf type=\"roughdielectric\"/></bsdf>\n")));
   EXPECT_NE(msg.find("c.xml:3:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("twosided cannot wrap a dielectric"), std::string::npos) << msg;
+  // Equal indices: a rough interface that refracts nothing (its transmission lobe is singular).
+  msg = loadError(dir.write("e.xml", sceneXml("<bsdf type=\"roughdielectric\">\n<float "
+                                              "name=\"intIOR\" value=\"1.3\"/><float "
+                                              "name=\"extIOR\" value=\"1.3\"/></bsdf>\n")));
+  EXPECT_NE(msg.find("e.xml:3: roughdielectric with intIOR equal to extIOR does not refract"),
+            std::string::npos)
+      << msg;
   // Tinted glass has no slot: refused, rough or smooth.
   msg = loadError(dir.write("d.xml", sceneXml("<bsdf type=\"roughdielectric\">\n<rgb "
                                               "name=\"specularTransmittance\" value=\"0.5 1 1\"/>"

@@ -4,18 +4,27 @@
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
+#include <fstream>
+#include <iterator>
 
 namespace farm {
 
 PlyMesh readPly(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (!file.good() && !file.eof()) throw std::runtime_error("cannot read the file");
+  if (bytes.compare(0, 4, "ply\n") != 0 && bytes.compare(0, 5, "ply\r\n") != 0)
+    throw std::runtime_error("not a PLY file (it does not start with the line 'ply')");
   Assimp::Importer importer;
   // Only what a PLY needs: polygons to triangles, and nothing that invents geometry or normals
   // (the loader computes Mitsuba's smooth normals itself when the file has none).
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType |
-                                                     aiProcess_JoinIdenticalVertices |
-                                                     aiProcess_ValidateDataStructure);
+  const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(),
+                                                     aiProcess_Triangulate | aiProcess_SortByPType |
+                                                         aiProcess_JoinIdenticalVertices |
+                                                         aiProcess_ValidateDataStructure,
+                                                     "ply");
   if (!scene) {
     std::string reason = importer.GetErrorString();
     if (reason.empty()) reason = "unknown error";
