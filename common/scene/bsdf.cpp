@@ -102,6 +102,16 @@ Vec3f reflect(const Vec3f& wo, const Vec3f& m) {
   return 2 * dot(wo, m) * m - wo;
 }
 
+// The half vector of a reflection (Walter et al. 2007, eq. 13), oriented to +z; false when wo
+// and wi are opposite and there is none.
+bool reflectionHalfVector(const Vec3f& wo, const Vec3f& wi, Vec3f* h) {
+  const Vec3f sum = wo + wi;
+  const float l = length(sum);
+  if (!(l > 0)) return false;
+  *h = sum.z < 0 ? -sum / l : sum / l;
+  return true;
+}
+
 // Snell's law about the local normal (0, 0, 1): wo refracted into the other side, with etaTI
 // the index ratio transmitted side / incident side and cosT the refracted cosine (>= 0).
 Vec3f refracted(const Vec3f& wo, float etaTI, float cosT) {
@@ -216,11 +226,8 @@ Spectrum Bsdf::roughDielectricEval(const Vec3f& wo, const Vec3f& wi, TransportMo
   const float alpha = desc_.alpha;
   float cosT;
   if (wo.z * wi.z > 0) {
-    Vec3f h = wo + wi;
-    const float hl = length(h);
-    if (!(hl > 0)) return Spectrum(0.0f);
-    h = h / hl;
-    if (h.z < 0) h = -h;
+    Vec3f h;
+    if (!reflectionHalfVector(wo, wi, &h)) return Spectrum(0.0f);
     const float d = microfacetD(dist, alpha, h);
     if (d == 0) return Spectrum(0.0f);
     const float g = smithG1(dist, alpha, wo, h) * smithG1(dist, alpha, wi, h);
@@ -251,11 +258,8 @@ float Bsdf::roughDielectricPdf(const Vec3f& wo, const Vec3f& wi) const {
   const MicrofacetDistribution dist = desc_.distribution;
   float cosT;
   if (wo.z * wi.z > 0) {
-    Vec3f h = wo + wi;
-    const float hl = length(h);
-    if (!(hl > 0)) return 0;
-    h = h / hl;
-    if (h.z < 0) h = -h;
+    Vec3f h;
+    if (!reflectionHalfVector(wo, wi, &h)) return 0;
     const float woh = dot(wo, h);
     if (woh * wo.z <= 0) return 0;  // sample() draws only facets that face wo
     const float f = fresnelDielectric(woh, eta, &cosT);
@@ -322,11 +326,8 @@ Spectrum Bsdf::eval(const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) co
       if (wo.z <= 0 || wi.z <= 0) return Spectrum(0.0f);
       return desc_.reflectance * kInvPi;
     case BsdfDescription::Type::RoughConductor: {
-      if (wo.z <= 0 || wi.z <= 0) return Spectrum(0.0f);
-      Vec3f h = wo + wi;
-      float hl = length(h);
-      if (hl == 0) return Spectrum(0.0f);
-      h = h / hl;
+      Vec3f h;
+      if (wo.z <= 0 || wi.z <= 0 || !reflectionHalfVector(wo, wi, &h)) return Spectrum(0.0f);
       float d = microfacetD(desc_.distribution, desc_.alpha, h);
       if (d == 0) return Spectrum(0.0f);
       float g = smithG1(desc_.distribution, desc_.alpha, wo, h) *
@@ -353,11 +354,8 @@ float Bsdf::pdf(const Vec3f& woIn, const Vec3f& wiIn) const {
       if (wo.z <= 0 || wi.z <= 0) return 0;
       return cosineHemispherePdf(wi.z);
     case BsdfDescription::Type::RoughConductor: {
-      if (wo.z <= 0 || wi.z <= 0) return 0;
-      Vec3f h = wo + wi;
-      float hl = length(h);
-      if (hl == 0) return 0;
-      h = h / hl;
+      Vec3f h;
+      if (wo.z <= 0 || wi.z <= 0 || !reflectionHalfVector(wo, wi, &h)) return 0;
       // the facet's density (facetPdf); the reflection Jacobian is 1 / (4 |wo.m|) (eq. 14)
       return facetPdf(desc_.distribution, desc_.alpha, wo, h) / (4 * absDot(wo, h));
     }

@@ -408,18 +408,12 @@ inline SceneDescription coveredLightRoom(bool coveredEmits, float gap = 1e-4f, i
   open.bsdf = covered.bsdf = 1;  // black
   d.bsdfs.push_back(diffuse(0.0f, true));
   cover.bsdf = int(d.bsdfs.size()) - 1;
-  for (ShapeDescription* light : {&open, &covered}) {
-    light->isEmitter = true;
-    light->radiance = Spectrum(20.0f);
-  }
+  open.isEmitter = true;
+  open.radiance = Spectrum(20.0f);
+  covered.isEmitter = coveredEmits;
+  covered.radiance = Spectrum(coveredEmits ? 20.0f : 0.0f);
   d.shapes.push_back(open);
-  if (coveredEmits) {
-    d.shapes.push_back(covered);
-  } else {
-    covered.isEmitter = false;
-    covered.radiance = Spectrum(0.0f);
-    d.shapes.push_back(covered);
-  }
+  d.shapes.push_back(covered);
   d.shapes.push_back(cover);
   return d;
 }

@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <pugixml.hpp>
@@ -1041,11 +1040,9 @@ class MitsubaLoader {
     config.vertex_color = false;
     // From memory, with no material library: tinyobj would open whatever file an `mtllib` line
     // names (outside the scene's folder, or /dev/zero), and materials come from the XML anyway.
-    std::ifstream in(objPath, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in.good() && !in.eof()) fail(fileNode, "cannot read OBJ '" + filename + "'");
     tinyobj::ObjReader reader;
-    if (!reader.ParseFromString(text, "", config)) {
+    if (!reader.ParseFromString(readMeshFile(fileNode, objPath, "OBJ '" + filename + "'"), "",
+                                config)) {
       std::string err = reader.Error();
       while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
       fail(fileNode,
@@ -1104,10 +1101,11 @@ class MitsubaLoader {
   // A PLY mesh through Open Asset Import Library (ply_reader.h).
   void loadPly(const pugi::xml_node& fileNode, const std::string& filename, const Matrix4& toWorld,
                bool faceNormals, bool flip, ShapeDescription* shape) {
-    const fs::path plyPath = meshPath(fileNode, filename);
+    const std::string bytes =
+        readMeshFile(fileNode, meshPath(fileNode, filename), "PLY '" + filename + "'");
     PlyMesh mesh;
     try {
-      mesh = readPly(plyPath.string());
+      mesh = parsePly(bytes);
     } catch (const std::exception& e) {
       fail(fileNode, "cannot read PLY '" + filename + "': " + e.what());
     }
@@ -1137,6 +1135,18 @@ class MitsubaLoader {
     if (!fs::is_regular_file(path, ec))
       fail(fileNode, "mesh file '" + filename + "' is not a regular file");
     return path;
+  }
+
+  // The bytes of a mesh file that meshPath found: the only place mesh files are opened, so the
+  // readers never open a file the scene's folder does not hold.
+  std::string readMeshFile(const pugi::xml_node& fileNode, const fs::path& path,
+                           const std::string& what) const {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(fileNode, "cannot open " + what + ": " + std::strerror(errno));
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    if (in.bad()) fail(fileNode, "cannot read " + what);
+    return bytes.str();
   }
 
   // What every mesh file goes through once read (`shape->indices` set, positions and normals in

@@ -4,15 +4,10 @@
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
-#include <fstream>
-#include <iterator>
 
 namespace farm {
 
-PlyMesh readPly(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  if (!file.good() && !file.eof()) throw std::runtime_error("cannot read the file");
+PlyMesh parsePly(const std::string& bytes) {
   if (bytes.compare(0, 4, "ply\n") != 0 && bytes.compare(0, 5, "ply\r\n") != 0)
     throw std::runtime_error("not a PLY file (it does not start with the line 'ply')");
   Assimp::Importer importer;

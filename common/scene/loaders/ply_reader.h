@@ -20,7 +20,8 @@ struct PlyMesh {
   std::vector<uint32_t> indices;  // three per triangle
 };
 
-// Throws std::runtime_error with assimp's reason (or ours) when the file cannot be read.
-PlyMesh readPly(const std::string& path);
+// The mesh in a PLY file's bytes. Throws std::runtime_error with assimp's reason (or ours) when
+// they are not a readable PLY.
+PlyMesh parsePly(const std::string& bytes);
 
 }  // namespace farm
