@@ -408,7 +408,11 @@ int main(int argc, char** argv) {
   std::string renderScene, renderOutput, reportDir;
   RenderOptions renderOptions;
   int threads = hardwareThreads, workers = 1;
-  render->add_option("SCENE", renderScene, "scene file (Mitsuba 0.6 XML)")->required();
+  render
+      ->add_option("SCENE", renderScene,
+                   "scene file: Mitsuba 0.6 XML, or pbrt-v3/v4 (.pbrt); its folder holds its "
+                   "meshes and textures")
+      ->required();
   render->add_option("-o,--output", renderOutput, "output OpenEXR file")->required();
   addRenderOptions(render, &renderOptions);
   render->add_option("--threads", threads, "chain threads in all (default: all hardware threads)")
@@ -429,7 +433,11 @@ int main(int argc, char** argv) {
   std::string address, submitScene;
   RenderOptions submitOptions;
   submit->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  submit->add_option("SCENE", submitScene, "scene file (Mitsuba 0.6 XML)")->required();
+  submit
+      ->add_option("SCENE", submitScene,
+                   "scene file: Mitsuba 0.6 XML, or pbrt-v3/v4 (.pbrt); its folder holds its "
+                   "meshes and textures")
+      ->required();
   addRenderOptions(submit, &submitOptions);
 
   // status

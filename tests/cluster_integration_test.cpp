@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "common/film/image.h"
 #include "tests/test_support.h"
@@ -23,12 +24,16 @@ using std::chrono::seconds;
 const std::string kScene = std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml";
 
 struct ClusterCase {
+  ClusterCase(std::string a, std::vector<std::string> b, std::string s = kScene, std::string n = "")
+      : algorithm(std::move(a)), budget(std::move(b)), scene(std::move(s)), name(std::move(n)) {}
   std::string algorithm;
   std::vector<std::string> budget;  // --spp N or --mpp N
+  std::string scene;
+  std::string name;  // the test's name when not the algorithm's
 };
 
 void PrintTo(const ClusterCase& c, std::ostream* os) {
-  *os << c.algorithm;
+  *os << c.algorithm << " " << c.scene;
 }
 
 class ClusterTest : public ::testing::TestWithParam<ClusterCase> {};
@@ -36,8 +41,8 @@ class ClusterTest : public ::testing::TestWithParam<ClusterCase> {};
 // `farm submit` of the Cornell box with `settings`; the job id (the last line of stdout), or
 // the command's error output when it failed.
 std::string submitJob(const std::string& address, const std::vector<std::string>& settings,
-                      const std::string& scratch) {
-  std::vector<std::string> submit = {FARM_CLI_BIN, "submit", "--coordinator", address, kScene};
+                      const std::string& scratch, const std::string& scene = kScene) {
+  std::vector<std::string> submit = {FARM_CLI_BIN, "submit", "--coordinator", address, scene};
   submit.insert(submit.end(), settings.begin(), settings.end());
   CommandResult submitted = runCommand(submit, std::chrono::seconds(60), scratch);
   if (submitted.exitCode != 0) return "farm submit failed: " + submitted.err;
@@ -92,7 +97,7 @@ TEST_P(ClusterTest, FetchedImageMatchesEmbeddedRender) {
                                        "--height",    "48",        "--seed",  "7"};
   settings.insert(settings.end(), c.budget.begin(), c.budget.end());
 
-  const std::string job = submitJob(coordinator.address(), settings, scratch.path());
+  const std::string job = submitJob(coordinator.address(), settings, scratch.path(), c.scene);
   ASSERT_EQ(job.rfind("job-", 0), 0u) << "last line of stdout: " << job;
 
   CommandResult fetched = runCommand({FARM_CLI_BIN, "fetch", "--coordinator", coordinator.address(),
@@ -110,8 +115,8 @@ TEST_P(ClusterTest, FetchedImageMatchesEmbeddedRender) {
     EXPECT_NE(status.out.find("\"bidir\""), std::string::npos) << status.out;
   }
 
-  std::vector<std::string> render = {FARM_CLI_BIN, "render", kScene, "-o", scratch / "embedded.exr",
-                                     "--threads",  "2"};
+  std::vector<std::string> render = {
+      FARM_CLI_BIN, "render", c.scene, "-o", scratch / "embedded.exr", "--threads", "2"};
   render.insert(render.end(), settings.begin(), settings.end());
   CommandResult rendered = runCommand(render, seconds(120), scratch.path());
   ASSERT_EQ(rendered.exitCode, 0) << rendered.err;
@@ -206,19 +211,24 @@ TEST_P(ClusterFailure, KilledWorkerChangesNothingButTime) {
   expectImagesAgree(distributed, embedded);
 }
 
-INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterTest,
-                         ::testing::Values(ClusterCase{"pt", {"--spp", "64"}},
-                                           ClusterCase{"bdpt", {"--spp", "16"}},
-                                           ClusterCase{"pssmlt", {"--mpp", "32"}},
-                                           ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
-                                           ClusterCase{"mmlt", {"--mpp", "32"}},
-                                           ClusterCase{"mlt", {"--mpp", "32"}},
-                                           ClusterCase{"erpt", {"--spp", "4"}}),
-                         [](const auto& info) {
-                           std::string name = info.param.algorithm;
-                           std::replace(name.begin(), name.end(), '-', '_');
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Algorithms, ClusterTest,
+    ::testing::Values(ClusterCase{"pt", {"--spp", "64"}}, ClusterCase{"bdpt", {"--spp", "16"}},
+                      ClusterCase{"pssmlt", {"--mpp", "32"}},
+                      ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
+                      ClusterCase{"mmlt", {"--mpp", "32"}}, ClusterCase{"mlt", {"--mpp", "32"}},
+                      ClusterCase{"erpt", {"--spp", "4"}},
+                      // pbrt-v3, PLY meshes and PNG textures (with a space
+                      // in a file name) through the bundle upload
+                      ClusterCase{"pssmlt",
+                                  {"--mpp", "8"},
+                                  std::string(FARM_SHARED_DIR) + "/scenes/veach-ajar/scene.pbrt",
+                                  "pssmlt_veach_ajar_pbrt"}),
+    [](const auto& info) {
+      std::string name = info.param.name.empty() ? info.param.algorithm : info.param.name;
+      std::replace(name.begin(), name.end(), '-', '_');
+      return name;
+    });
 
 INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterFailure,
                          ::testing::Values(ClusterCase{"pt", {"--spp", "256"}},

@@ -31,6 +31,8 @@ struct Case {
   std::string scene, reference;
   Algorithm algorithm;
   int64_t perPixel;  // spp or mpp for each of the two renders
+  std::string file = "scene.xml";
+  int maxDepth = 0;  // 0: the scene's
 };
 
 void expectAgreement(const Case& c) {
@@ -46,7 +48,8 @@ void expectAgreement(const Case& c) {
     s.height = ref.height;
     s.samplesPerPixel = s.mutationsPerPixel = c.perPixel;
     s.seed = 1000 + k;
-    auto scene = loadScene(kShared + "/scenes/" + c.scene + "/scene.xml", s);
+    s.maxDepth = c.maxDepth;
+    auto scene = loadScene(kShared + "/scenes/" + c.scene + "/" + c.file, s);
     RenderJob job(scene, s, "reference");
     r[k] = renderLocally(job);
     ASSERT_EQ(r[k].image.width, ref.width);
@@ -148,6 +151,17 @@ TEST(Reference, CornellBoxPathSpace) {
 }
 TEST(Reference, CornellBoxEnergyRedistribution) {
   expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::ERPT, 1});
+}
+// The Cornell box in pbrt's form (the loader's camera, transforms, materials and area light):
+// its file asks for 5 bounces, the reference (of the Mitsuba scene) has 65, which is what is
+// compared.
+TEST(Reference, CornellBoxPbrtPathTracing) {
+  expectAgreement(
+      {"cornell-box-pbrt", "cornell-box-256.exr", Algorithm::PathTracing, 8, "scene.pbrt", 65});
+}
+TEST(Reference, CornellBoxPbrtBidirectional) {
+  expectAgreement(
+      {"cornell-box-pbrt", "cornell-box-256.exr", Algorithm::Bidirectional, 4, "scene.pbrt", 65});
 }
 TEST(Reference, VeachMisPathTracing) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PathTracing, 16});

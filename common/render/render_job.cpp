@@ -13,7 +13,7 @@
 #include "common/mcmc/mlt_chain.h"
 #include "common/mcmc/pssmlt_chain.h"
 #include "common/scene/film_override.h"
-#include "common/scene/loaders/mitsuba_loader.h"
+#include "common/scene/loaders/scene_loader.h"
 #include "common/scene/scene.h"
 #include "common/transport/bidirectional.h"
 #include "common/transport/path.h"
@@ -332,7 +332,7 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
 }
 
 std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& settings) {
-  SceneDescription desc = loadMitsubaScene(path);
+  SceneDescription desc = loadSceneDescription(path);
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);
   }

@@ -190,7 +190,16 @@ Spectrum fresnelConductor(float cosThetaI, const Spectrum& eta, const Spectrum& 
   return result;
 }
 
-Bsdf::Bsdf(const BsdfDescription& desc) : desc_(desc), type_(desc.type) {}
+Bsdf::Bsdf(const BsdfDescription& desc) : desc_(desc), type_(desc.type) {
+  // Scene::bsdfAt copies a Bsdf for every shading point of a textured material; without the
+  // name, that copy never allocates.
+  desc_.id.clear();
+  desc_.id.shrink_to_fit();
+}
+
+void Bsdf::setReflectance(const Spectrum& reflectance) {
+  desc_.reflectance = reflectance;
+}
 
 bool Bsdf::isBlack() const {
   switch (type_) {

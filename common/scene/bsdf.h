@@ -48,7 +48,10 @@ class Bsdf {
   // sides). It converts a delta function in one direction into one in the other.
   float diracJacobian(const Vec3f& a, const Vec3f& b) const;
   bool isBlack() const;  // reflects nothing at all (e.g. the black diffuse of a light)
+  // The description, less its id (see the constructor).
   const BsdfDescription& description() const { return desc_; }
+  // The diffuse reflectance at one shading point, where a texture gives it (Scene::bsdfAt).
+  void setReflectance(const Spectrum& reflectance);
 
  private:
   Spectrum conductorFresnel(float cosThetaI) const;  // times specularReflectance

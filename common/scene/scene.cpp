@@ -54,7 +54,25 @@ bool triangleNormals(const ShapeDescription& s, uint32_t prim, float w0, float w
 }  // namespace
 
 Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
-  for (const BsdfDescription& b : desc_.bsdfs) bsdfs_.emplace_back(b);
+  // Textures refer only to earlier ones (no cycles), and every reference is in range: what the
+  // loaders guarantee, checked here for descriptions built by hand.
+  const int numTextures = int(desc_.textures.size());
+  for (int i = 0; i < numTextures; ++i) {
+    const TextureDescription& t = desc_.textures[size_t(i)];
+    bool ok = true;
+    if (t.type == TextureDescription::Type::Image) ok = t.image && t.image->width > 0;
+    if (t.type == TextureDescription::Type::Checkerboard ||
+        t.type == TextureDescription::Type::Scale)
+      ok = t.tex1 >= 0 && t.tex1 < i && t.tex2 >= 0 && t.tex2 < i;
+    if (!ok) throw std::invalid_argument("texture " + std::to_string(i) + " is malformed");
+  }
+  for (const BsdfDescription& b : desc_.bsdfs) {
+    if (b.reflectanceTexture >= numTextures)
+      throw std::invalid_argument("a BSDF refers to texture " +
+                                  std::to_string(b.reflectanceTexture) + " of " +
+                                  std::to_string(numTextures));
+    bsdfs_.emplace_back(b);
+  }
   bsdfs_.emplace_back(BsdfDescription{});  // default diffuse for shapes without a bsdf
 
   RTCDevice device = rtcNewDevice(nullptr);
@@ -71,6 +89,10 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
   triangleCdf_.resize(n);
   for (int i = 0; i < n; ++i) {
     const ShapeDescription& s = desc_.shapes[i];
+    if (!s.uvs.empty() && s.uvs.size() != s.positions.size())
+      throw std::invalid_argument("shape " + std::to_string(i) + " has " +
+                                  std::to_string(s.uvs.size()) + " texture coordinates for " +
+                                  std::to_string(s.positions.size()) + " vertices");
     int b = s.bsdf;
     shapeBsdf_[i] = (b >= 0 && b < int(desc_.bsdfs.size())) ? b : int(bsdfs_.size()) - 1;
     double area = 0;
@@ -181,6 +203,7 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
     hit->p = s.center + n * s.radius;  // back onto the surface
     hit->ng = s.flipNormals ? -n : n;
     hit->ns = hit->ng;
+    hit->uv = Vec2f(0, 0);
   } else {
     float u = rh.hit.u, v = rh.hit.v;
     // Along the ray rather than by the barycentrics: a point interpolated between the vertices
@@ -189,8 +212,22 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
     // only by the rounding of t, along the ray. The spawn offsets cover either.
     hit->p = r.o + r.d * rh.ray.tfar;
     if (!triangleNormals(s, rh.hit.primID, 1 - u - v, u, v, &hit->ng, &hit->ns)) return false;
+    hit->uv = Vec2f(0, 0);
+    if (!s.uvs.empty()) {
+      const uint32_t* tri = &s.indices[3 * size_t(rh.hit.primID)];
+      const Vec2f &a = s.uvs[tri[0]], &b = s.uvs[tri[1]], &c = s.uvs[tri[2]];
+      const float w = 1 - u - v;
+      hit->uv = Vec2f(w * a.x + u * b.x + v * c.x, w * a.y + u * b.y + v * c.y);
+    }
   }
   return true;
+}
+
+Bsdf Scene::bsdfAt(int shape, const Vec2f& uv) const {
+  Bsdf bsdf = bsdfs_[shapeBsdf_[shape]];
+  const int texture = bsdf.description().reflectanceTexture;
+  if (texture >= 0) bsdf.setReflectance(evalTexture(desc_.textures, texture, uv));
+  return bsdf;
 }
 
 bool Scene::visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1) const {

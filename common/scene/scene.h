@@ -14,6 +14,7 @@ struct SurfaceHit {
   Vec3f p;   // on the surface (re-projected for accuracy)
   Vec3f ng;  // unit geometric normal, oriented as the shape defines it (outside)
   Vec3f ns;  // unit shading normal: interpolated vertex normals, else ng
+  Vec2f uv;  // texture coordinates: interpolated vertex uvs, else (0, 0)
   float t = 0;
   int shape = -1;
   uint32_t primitive = 0;
@@ -59,7 +60,11 @@ class Scene {
   // A ray leaving surface point p (geometric normal ng) in direction d, offset off the surface.
   Ray spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const;
 
+  // The shape's BSDF as its description gives it: what does not depend on textures (its type,
+  // its Dirac lobes) may be read here.
   const Bsdf& bsdfOf(int shape) const { return bsdfs_[shapeBsdf_[shape]]; }
+  // The BSDF at one point of the shape, at texture coordinates uv: what evaluates and samples.
+  Bsdf bsdfAt(int shape, const Vec2f& uv) const;
   int lightOf(int shape) const { return shapeLight_[shape]; }  // -1 when not an emitter
 
   const std::vector<AreaLight>& lights() const { return lights_; }

@@ -8,6 +8,7 @@
 
 #include "common/math/transform.h"
 #include "common/math/vec.h"
+#include "common/scene/texture.h"
 
 namespace farm {
 
@@ -33,8 +34,10 @@ struct BsdfDescription {
   Type type = Type::Diffuse;
   std::string id;         // the XML id, or empty
   bool twoSided = false;  // wrapped in Mitsuba's "twosided"
-  // diffuse
+  // diffuse: the reflectance, or where reflectanceTexture >= 0 the texture
+  // SceneDescription::textures[reflectanceTexture] gives it
   Spectrum reflectance{0.5f};
+  int reflectanceTexture = -1;
   // dielectric and roughdielectric: interior and exterior indices of refraction
   float intIOR = 1.5046f, extIOR = 1.000277f;
   // roughconductor and roughdielectric
@@ -52,6 +55,7 @@ struct ShapeDescription {
   // TriangleMesh, world space
   std::vector<Vec3f> positions;
   std::vector<Vec3f> normals;     // per vertex, may be empty (then geometric normals are used)
+  std::vector<Vec2f> uvs;         // per vertex texture coordinates, may be empty (then (0, 0))
   std::vector<uint32_t> indices;  // 3 per triangle
   bool faceNormals = false;       // ignore vertex normals
   // Sphere, world space
@@ -71,6 +75,7 @@ struct SceneDescription {
   CameraDescription camera;
   int maxDepth = -1;  // longest path in edges, Mitsuba's convention; -1 = unbounded
   std::vector<BsdfDescription> bsdfs;
+  std::vector<TextureDescription> textures;
   std::vector<ShapeDescription> shapes;
   // What the loader changed or left out, one line each ("FILE:LINE: ..."), for the user.
   std::vector<std::string> warnings;

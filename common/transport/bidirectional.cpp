@@ -46,6 +46,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
     v.p = hit.p;
     v.n = hit.ng;
     v.ns = hit.ns;
+    v.uv = hit.uv;
     v.wo = -ray.d;
     v.shape = hit.shape;
     v.light = scene_.lightOf(hit.shape);
@@ -54,7 +55,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
     ++count;
     if (count >= maxVertices) break;
 
-    const Bsdf& bsdf = scene_.bsdfOf(hit.shape);
+    const Bsdf& bsdf = scene_.bsdfAt(hit.shape, hit.uv);
     float u[3] = {sampler.next(stream), sampler.next(stream), sampler.next(stream)};
     float uRoulette = sampler.next(stream);
     if (bsdf.isBlack() || !sidesAgree(v.wo, v.n, v.ns)) break;
@@ -161,7 +162,7 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
     } else {
       if (!sidesAgree(w, y.n, y.ns)) return Spectrum(0.0f);
       Frame frame(y.ns);
-      f = scene_.bsdfOf(y.shape).eval(frame.toLocal(y.wo), frame.toLocal(w),
+      f = scene_.bsdfAt(y.shape, y.uv).eval(frame.toLocal(y.wo), frame.toLocal(w),
                                       TransportMode::Importance);
     }
     if (isBlack(f)) return Spectrum(0.0f);
@@ -178,14 +179,14 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   if (!sidesAgree(w, z.n, z.ns)) return Spectrum(0.0f);
   Frame fz(z.ns);
   Spectrum f =
-      scene_.bsdfOf(z.shape).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
+      scene_.bsdfAt(z.shape, z.uv).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
   if (isBlack(f)) return Spectrum(0.0f);
   if (s == 1) {
     f *= dot(y.n, -w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
   } else {
     if (!sidesAgree(-w, y.n, y.ns)) return Spectrum(0.0f);
     Frame fy(y.ns);
-    f *= scene_.bsdfOf(y.shape).eval(fy.toLocal(y.wo), fy.toLocal(-w), TransportMode::Importance);
+    f *= scene_.bsdfAt(y.shape, y.uv).eval(fy.toLocal(y.wo), fy.toLocal(-w), TransportMode::Importance);
   }
   if (isBlack(f)) return Spectrum(0.0f);
   // The camera side's cosine is the shading one (the rendering equation's); the light side's
@@ -242,13 +243,13 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       pE[s - 1] = toAreaDensity(scene_.camera().importance(w), z->p, *y);
     } else {
       Frame fz(z->ns);
-      float pdf = scene_.bsdfOf(z->shape).pdf(fz.toLocal(z->wo), fz.toLocal(w));
+      float pdf = scene_.bsdfAt(z->shape, z->uv).pdf(fz.toLocal(z->wo), fz.toLocal(w));
       pE[s - 1] = toAreaDensity(pdf, z->p, *y);
     }
     if (s > 1) {  // x_{s-2} sampled from y, arriving from z
       const PathVertex& yPrev = lightPath[s - 2];
       Frame fy(y->ns);
-      float pdf = scene_.bsdfOf(y->shape).pdf(fy.toLocal(-w), fy.toLocal(y->wo));
+      float pdf = scene_.bsdfAt(y->shape, y->uv).pdf(fy.toLocal(-w), fy.toLocal(y->wo));
       pE[s - 2] = toAreaDensity(pdf, y->p, yPrev);
     }
   }
@@ -268,13 +269,13 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
         pdf = cosineHemispherePdf(dot(y->n, w));
       } else {
         Frame fy(y->ns);
-        pdf = scene_.bsdfOf(y->shape).pdf(fy.toLocal(y->wo), fy.toLocal(w));
+        pdf = scene_.bsdfAt(y->shape, y->uv).pdf(fy.toLocal(y->wo), fy.toLocal(w));
       }
       pL[s] = toAreaDensity(pdf, y->p, *z);
       if (t > 1) {  // z_{t-2} sampled from z, arriving from y
         const PathVertex& zPrev = cameraPath[t - 2];
         Frame fz(z->ns);
-        float pdfz = scene_.bsdfOf(z->shape).pdf(fz.toLocal(-w), fz.toLocal(z->wo));
+        float pdfz = scene_.bsdfAt(z->shape, z->uv).pdf(fz.toLocal(-w), fz.toLocal(z->wo));
         pL[s + 1] = toAreaDensity(pdfz, z->p, zPrev);
       }
     }

@@ -1,5 +1,7 @@
 #include "common/transport/path.h"
 
+#include <cmath>
+
 #include "common/math/bytes.h"
 #include "common/scene/scene.h"
 
@@ -51,7 +53,7 @@ class ScaledProduct {
   bool ok_ = true;
 };
 
-constexpr uint32_t kPathMagic = 0x31485450;  // "PTH1"
+constexpr uint32_t kPathMagic = 0x32485450;  // "PTH2": with texture coordinates
 
 }  // namespace
 
@@ -104,7 +106,7 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
     const Vec3f wo = direction(i + 1, i + 2, &d2Next);  // towards the camera
     const Vec3f wi = -w;                                // towards the light
     if (!(d2Next > 0) || !sidesAgree(wi, v.n, v.ns) || !sidesAgree(wo, v.n, v.ns)) return out;
-    const Bsdf& bsdf = scene.bsdfOf(v.shape);
+    const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
     Frame frame(v.ns);
     Vec3f lo = frame.toLocal(wo), li = frame.toLocal(wi);
     if (bsdf.isDelta()) {
@@ -146,6 +148,7 @@ std::string Path::serialize() const {
   for (const PathVertex& v : vertices) {
     appendBytes(s, uint8_t(v.kind));
     for (const Vec3f* x : {&v.p, &v.n, &v.ns}) appendBytes(s, *x);
+    appendBytes(s, v.uv);
     appendBytes(s, int32_t(v.shape));
     appendBytes(s, int32_t(v.light));
   }
@@ -157,7 +160,7 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
   uint32_t magic, count;
   if (!readBytes(bytes, at, &magic) || magic != kPathMagic || !readBytes(bytes, at, &count))
     return false;
-  constexpr size_t kVertexBytes = 1 + 9 * sizeof(float) + 2 * sizeof(int32_t);
+  constexpr size_t kVertexBytes = 1 + 11 * sizeof(float) + 2 * sizeof(int32_t);
   if (count < 2 || count > (bytes.size() - at) / kVertexBytes) return false;
   const int shapes = int(scene.description().shapes.size());
   const int lights = int(scene.lights().size());
@@ -168,13 +171,16 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
     int32_t shape, light;
     if (!readBytes(bytes, at, &kind) || !readBytes(bytes, at, &v.p) ||
         !readBytes(bytes, at, &v.n) || !readBytes(bytes, at, &v.ns) ||
-        !readBytes(bytes, at, &shape) || !readBytes(bytes, at, &light))
+        !readBytes(bytes, at, &v.uv) || !readBytes(bytes, at, &shape) ||
+        !readBytes(bytes, at, &light))
       return false;
     if (kind > uint8_t(PathVertex::Kind::Surface)) return false;
     v.kind = PathVertex::Kind(kind);
     v.shape = shape;
     v.light = light;
-    if (!isFinite(v.p) || !isFinite(v.n) || !isFinite(v.ns)) return false;
+    if (!isFinite(v.p) || !isFinite(v.n) || !isFinite(v.ns) || !std::isfinite(v.uv.x) ||
+        !std::isfinite(v.uv.y))
+      return false;
     const bool isCamera = v.kind == PathVertex::Kind::Camera;
     if (isCamera != (i + 1 == count)) return false;  // the camera, and only it, ends the path
     if (!isCamera) {

@@ -160,12 +160,16 @@ TEST(Path, DeserializeRefusesWhatIsNotAPathOfTheScene) {
   EXPECT_FALSE(x.deserialize(bytes.substr(0, bytes.size() - 1), *scene));
   std::string badShape = bytes;
   const int32_t huge = 1 << 30;
-  std::memcpy(&badShape[8 + 1 + 36], &huge, sizeof(huge));  // the first vertex's shape
+  // The first vertex: kind (1 byte), p, n, ns (36), uv (8), then its shape.
+  std::memcpy(&badShape[8 + 1 + 44], &huge, sizeof(huge));
   EXPECT_FALSE(x.deserialize(badShape, *scene));
   std::string nan = bytes;
   const float qnan = std::nanf("");
   std::memcpy(&nan[8 + 1], &qnan, sizeof(qnan));  // the first vertex's x coordinate
   EXPECT_FALSE(x.deserialize(nan, *scene));
+  std::string nanUv = bytes;
+  std::memcpy(&nanUv[8 + 1 + 36], &qnan, sizeof(qnan));  // its texture coordinate u
+  EXPECT_FALSE(x.deserialize(nanUv, *scene));
 }
 
 }  // namespace

@@ -40,6 +40,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       v.p = hit.p;
       v.n = hit.ng;
       v.ns = hit.ns;
+      v.uv = hit.uv;
       v.shape = hit.shape;
       v.light = light;
       vertices->push_back(v);
@@ -60,7 +61,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     }
     if (depth >= maxDepth_) break;
 
-    const Bsdf& bsdf = scene_.bsdfOf(hit.shape);
+    const Bsdf& bsdf = scene_.bsdfAt(hit.shape, hit.uv);
     if (bsdf.isBlack() || !sidesAgree(-ray.d, hit.ng, hit.ns)) break;
     Frame frame(hit.ns);
     Vec3f wo = frame.toLocal(-ray.d);

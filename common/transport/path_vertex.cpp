@@ -27,7 +27,7 @@ double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& from, co
   Frame frame(v.ns);
   Vec3f wo = frame.toLocal(normalize(from - v.p));
   Vec3f wi = frame.toLocal(normalize(to - v.p));
-  const Bsdf& bsdf = scene.bsdfOf(v.shape);
+  const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
   if (!bsdf.isDelta()) return bsdf.pdf(wo, wi);
   bool reflection;
   float probability;

@@ -16,6 +16,7 @@ struct PathVertex {
   Vec3f n;   // geometric normal; zero for the (pinhole) camera
   Vec3f ns;  // shading normal (the BSDF's frame); n for lights, zero for the camera
   Vec3f wo;  // unit direction to the previous vertex of its own subpath
+  Vec2f uv;  // texture coordinates, where the BSDF is looked up (Scene::bsdfAt)
   int shape = -1;
   int light = -1;      // the area light this vertex lies on, or -1
   Spectrum beta;       // subpath throughput up to here, divided by the sampling densities

@@ -75,7 +75,7 @@ int sampleDiscrete(const std::vector<double>& weights, double total, Rng& rng) {
 bool scatterStep(const MutationContext& context, const PathVertex& at, const PathVertex& from,
                  TransportMode mode, Rng& rng, PathVertex* next) {
   const Scene& scene = context.scene;
-  const Bsdf& bsdf = scene.bsdfOf(at.shape);
+  const Bsdf& bsdf = scene.bsdfAt(at.shape, at.uv);
   Vec3f woWorld = normalize(from.p - at.p);
   if (bsdf.isBlack() || !sidesAgree(woWorld, at.n, at.ns)) return false;
   Frame frame(at.ns);

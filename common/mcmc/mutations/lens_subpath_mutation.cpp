@@ -46,7 +46,7 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
     walk.push_back(v);
     const int length = m + int(walk.size());  // edges of the path this would make
     if (context_.maxDepth >= 0 && length > context_.maxDepth) return false;
-    const Bsdf& bsdf = scene.bsdfOf(v.shape);
+    const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
     if (!bsdf.isDelta()) break;
     if (int(walk.size()) > kMaxSpecularChain) return false;
     Vec3f wo = normalize(previous.p - v.p);

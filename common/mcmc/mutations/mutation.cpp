@@ -34,6 +34,7 @@ bool traceVertex(const MutationContext& context, const PathVertex& from, const V
   hit->p = h.p;
   hit->n = h.ng;
   hit->ns = h.ns;
+  hit->uv = h.uv;
   hit->shape = h.shape;
   hit->light = scene.lightOf(h.shape);
   return true;

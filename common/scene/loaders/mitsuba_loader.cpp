@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "common/scene/loaders/ply_reader.h"
+#include "common/scene/loaders/scene_files.h"
 #include "common/scene/mesh_cleanup.h"
 
 namespace farm {
@@ -28,11 +29,6 @@ namespace farm {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string formatMessage(const std::string& file, int line, const std::string& problem) {
-  if (line > 0) return file + ":" + std::to_string(line) + ": " + problem;
-  return file + ": " + problem;
-}
 
 std::string toLower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -205,18 +201,7 @@ class MitsubaLoader {
   // ---- File and XML ----
 
   void readFile() {
-    std::error_code ec;
-    fs::file_status st = fs::status(path_, ec);
-    if (st.type() == fs::file_type::not_found)
-      throw SceneLoadError(path_, 0, "scene file not found");
-    if (ec) throw SceneLoadError(path_, 0, "cannot access: " + ec.message());
-    if (!fs::is_regular_file(st)) throw SceneLoadError(path_, 0, "not a regular file");
-    std::ifstream in(path_, std::ios::binary);
-    if (!in) throw SceneLoadError(path_, 0, std::string("cannot open: ") + std::strerror(errno));
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    if (in.bad()) throw SceneLoadError(path_, 0, "read error");
-    text_ = ss.str();
+    text_ = readSceneText(path_);
     for (size_t i = 0; i < text_.size(); ++i)
       if (text_[i] == '\n') newlines_.push_back(i);
     dir_ = fs::path(path_).parent_path();
@@ -966,13 +951,6 @@ class MitsubaLoader {
     registerId(node, "shape", int(scene_.shapes.size()) - 1);
   }
 
-  static double determinant3(const Matrix4& t) {
-    const auto& m = t.m;
-    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-  }
-
   // The uniform scale factor of a rotation-scale-translation matrix; spheres stay analytic, so an
   // ellipsoid-making transform is refused.
   double similarityScale(const pugi::xml_node& node, const Matrix4& t) const {
@@ -1033,7 +1011,7 @@ class MitsubaLoader {
 
   void loadObj(const pugi::xml_node& fileNode, const std::string& filename, const Matrix4& toWorld,
                bool faceNormals, bool flip, ShapeDescription* shape) {
-    const fs::path objPath = meshPath(fileNode, filename);
+    const fs::path objPath = sceneFilePath(dir_, filename, "mesh file", path_, lineOf(fileNode));
 
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
@@ -1041,8 +1019,9 @@ class MitsubaLoader {
     // From memory, with no material library: tinyobj would open whatever file an `mtllib` line
     // names (outside the scene's folder, or /dev/zero), and materials come from the XML anyway.
     tinyobj::ObjReader reader;
-    if (!reader.ParseFromString(readMeshFile(fileNode, objPath, "OBJ '" + filename + "'"), "",
-                                config)) {
+    if (!reader.ParseFromString(
+            readSceneFile(objPath, "OBJ '" + filename + "'", path_, lineOf(fileNode)), "",
+            config)) {
       std::string err = reader.Error();
       while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
       fail(fileNode,
@@ -1094,15 +1073,16 @@ class MitsubaLoader {
         normals[i] = Vec3f(n[0], n[1], n[2]);
       }
     }
-    finishMesh(fileNode, "OBJ '" + filename + "'", toWorld, faceNormals, flip, std::move(positions),
-               std::move(normals), shape);
+    finishMesh(path_, lineOf(fileNode), "OBJ '" + filename + "'", toWorld, faceNormals, flip,
+               std::move(positions), std::move(normals), {}, shape, &scene_.warnings);
   }
 
   // A PLY mesh through Open Asset Import Library (ply_reader.h).
   void loadPly(const pugi::xml_node& fileNode, const std::string& filename, const Matrix4& toWorld,
                bool faceNormals, bool flip, ShapeDescription* shape) {
     const std::string bytes =
-        readMeshFile(fileNode, meshPath(fileNode, filename), "PLY '" + filename + "'");
+        readSceneFile(sceneFilePath(dir_, filename, "mesh file", path_, lineOf(fileNode)),
+                      "PLY '" + filename + "'", path_, lineOf(fileNode));
     PlyMesh mesh;
     try {
       mesh = parsePly(bytes);
@@ -1110,115 +1090,9 @@ class MitsubaLoader {
       fail(fileNode, "cannot read PLY '" + filename + "': " + e.what());
     }
     shape->indices = std::move(mesh.indices);
-    finishMesh(fileNode, "PLY '" + filename + "'", toWorld, faceNormals, flip,
-               std::move(mesh.positions), std::move(mesh.normals), shape);
-  }
-
-  // Where a mesh file named in the scene is: relative to the scene's folder and inside it; a
-  // clear error when it is elsewhere, missing or not a file. Inside, because the folder is what a
-  // farm submission uploads, and because a coordinator must not read its own files (an absolute
-  // path, or one climbing out with "..") for whoever submits a scene. Lexically, so a folder
-  // may hold symbolic links to its meshes.
-  fs::path meshPath(const pugi::xml_node& fileNode, const std::string& filename) const {
-    fs::path named(filename);
-    std::error_code ec;
-    const fs::path root = fs::absolute(dir_, ec).lexically_normal();
-    const fs::path inside = (root / named).lexically_normal().lexically_relative(root);
-    if (named.is_absolute() || inside.empty() || *inside.begin() == "..")
-      fail(fileNode, "mesh file '" + filename +
-                         "' is outside the scene's folder: meshes must be inside it (with a "
-                         "relative path), as a farm submission uploads that folder only");
-    // Named in messages as the scene names its folder, which the coordinator strips from them.
-    const fs::path path = dir_ / named;
-    if (!fs::exists(path, ec))
-      fail(fileNode, "mesh file '" + filename + "' not found (looked for " + path.string() + ")");
-    if (!fs::is_regular_file(path, ec))
-      fail(fileNode, "mesh file '" + filename + "' is not a regular file");
-    return path;
-  }
-
-  // The bytes of a mesh file that meshPath found: the only place mesh files are opened, so the
-  // readers never open a file the scene's folder does not hold.
-  std::string readMeshFile(const pugi::xml_node& fileNode, const fs::path& path,
-                           const std::string& what) const {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail(fileNode, "cannot open " + what + ": " + std::strerror(errno));
-    std::ostringstream bytes;
-    bytes << in.rdbuf();
-    if (in.bad()) fail(fileNode, "cannot read " + what);
-    return bytes.str();
-  }
-
-  // What every mesh file goes through once read (`shape->indices` set, positions and normals in
-  // the file's coordinates, normals empty when the file has none): to world space, degenerate
-  // triangles out with a warning, the file's normals or Mitsuba's smooth ones (unless
-  // faceNormals), and flipNormals.
-  void finishMesh(const pugi::xml_node& fileNode, const std::string& what, const Matrix4& toWorld,
-                  bool faceNormals, bool flip, std::vector<Vec3f> positions,
-                  std::vector<Vec3f> normals, ShapeDescription* shape) {
-    Matrix4 normalMatrix = toWorld.inverse().transpose();
-    shape->positions.resize(positions.size());
-    for (size_t i = 0; i < positions.size(); ++i) {
-      shape->positions[i] = toWorld.applyPoint(positions[i]);
-      if (!isFinite(shape->positions[i]))
-        fail(fileNode, what + " has a non-finite vertex position");
-    }
-    // Before the normals: a needle's normal is noise and would spoil its vertices' averages.
-    DegenerateTriangles degenerate = removeDegenerateTriangles(shape);
-    if (degenerate.total() > 0) {
-      scene_.warnings.push_back(
-          formatMessage(path_, lineOf(fileNode), what + ": " + describe(degenerate)));
-    }
-    if (shape->indices.empty()) fail(fileNode, what + " contains only degenerate triangles");
-    bool normalsOk = !faceNormals && normals.size() == positions.size();
-    if (normalsOk) {
-      shape->normals.resize(normals.size());
-      for (size_t i = 0; i < normals.size() && normalsOk; ++i) {
-        Vec3f w = normalMatrix.applyVector(normals[i]);
-        float len = length(w);
-        if (!(len > 0) || !std::isfinite(len)) normalsOk = false;  // fall back to computed ones
-        shape->normals[i] = w / len;
-      }
-    }
-    if (!normalsOk) shape->normals.clear();
-    if (!faceNormals && !normalsOk) computeSmoothNormals(shape);
-    shape->faceNormals = faceNormals;
-    if (flip) {
-      for (size_t t = 0; t < shape->indices.size(); t += 3)
-        std::swap(shape->indices[t + 1], shape->indices[t + 2]);
-      for (Vec3f& n : shape->normals) n = -n;
-    }
-  }
-
-  // Mitsuba computes smooth vertex normals for meshes that come without them (unless
-  // faceNormals): the angle-weighted average of the adjacent faces' normals.
-  static void computeSmoothNormals(ShapeDescription* shape) {
-    std::vector<Vec3f> acc(shape->positions.size(), Vec3f(0.0f));
-    const auto& P = shape->positions;
-    for (size_t t = 0; t < shape->indices.size(); t += 3) {
-      uint32_t idx[3] = {shape->indices[t], shape->indices[t + 1], shape->indices[t + 2]};
-      Vec3f n = cross(P[idx[1]] - P[idx[0]], P[idx[2]] - P[idx[0]]);
-      float len = length(n);
-      if (!(len > 0)) continue;  // degenerate: no direction to contribute
-      n /= len;
-      for (int k = 0; k < 3; ++k) {
-        Vec3f e1 = P[idx[(k + 1) % 3]] - P[idx[k]], e2 = P[idx[(k + 2) % 3]] - P[idx[k]];
-        float l1 = length(e1), l2 = length(e2);
-        if (!(l1 > 0) || !(l2 > 0)) continue;
-        float c = std::clamp(dot(e1, e2) / (l1 * l2), -1.0f, 1.0f);
-        acc[idx[k]] += n * std::acos(c);
-      }
-    }
-    for (Vec3f& n : acc) {
-      float len = length(n);
-      if (!(len > 0) || !std::isfinite(len)) {
-        // A vertex only on degenerate faces: without a direction for it, use geometric normals.
-        shape->normals.clear();
-        return;
-      }
-      n /= len;
-    }
-    shape->normals = std::move(acc);
+    finishMesh(path_, lineOf(fileNode), "PLY '" + filename + "'", toWorld, faceNormals, flip,
+               std::move(mesh.positions), std::move(mesh.normals), std::move(mesh.uvs), shape,
+               &scene_.warnings);
   }
 
   std::string path_;
@@ -1233,12 +1107,6 @@ class MitsubaLoader {
 };
 
 }  // namespace
-
-SceneLoadError::SceneLoadError(const std::string& file, int line, const std::string& problem)
-    : std::runtime_error(formatMessage(file, line, problem)),
-      file_(file),
-      line_(line),
-      problem_(problem) {}
 
 SceneDescription loadMitsubaScene(const std::string& path) {
   return MitsubaLoader(path).load();

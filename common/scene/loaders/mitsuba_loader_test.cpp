@@ -14,6 +14,7 @@
 
 #include "common/math/transform.h"
 #include "common/scene/film_override.h"
+#include "common/scene/loaders/temp_dir_for_tests.h"
 
 namespace farm {
 namespace {
@@ -38,30 +39,6 @@ Vec3f triangleNormal(const ShapeDescription& s, size_t t) {
   const Vec3f& c = s.positions[s.indices[3 * t + 2]];
   return cross(b - a, c - a);
 }
-
-// A fresh directory per test for small scene files.
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "mitsuba_loader_test_XXXXXX").string();
-    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& name, const std::string& text) const {
-    fs::path p = path_ / name;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 // Wraps body lines in a scene; the first body line is line 3 of the file.
 std::string sceneXml(const std::string& body) {

@@ -26,11 +26,12 @@ PlyMesh parsePly(const std::string& bytes) {
     throw std::runtime_error(reason);
   }
   PlyMesh out;
-  bool allNormals = true;
+  bool allNormals = true, allUvs = true;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* mesh = scene->mMeshes[m];
     if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     allNormals = allNormals && mesh->HasNormals();
+    allUvs = allUvs && mesh->HasTextureCoords(0);
   }
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* mesh = scene->mMeshes[m];
@@ -42,6 +43,10 @@ PlyMesh parsePly(const std::string& bytes) {
       if (allNormals) {
         const aiVector3D& n = mesh->mNormals[v];
         out.normals.emplace_back(n.x, n.y, n.z);
+      }
+      if (allUvs) {
+        const aiVector3D& t = mesh->mTextureCoords[0][v];
+        out.uvs.emplace_back(t.x, t.y);
       }
     }
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {

@@ -1,10 +1,10 @@
 #pragma once
 // PLY meshes (ASCII and binary, Stanford's format) through Open Asset Import Library: the
 // triangles of every mesh in the file, in the file's own coordinates, with per-vertex normals
-// where the file has them. Polygons are triangulated; points and lines are refused, as a mesh
-// made only of them has no surface to render. Only PLY: the file must start as one, and assimp
-// reads it from memory with its PLY importer alone, so no other format's importer (some of which
-// open further files the first one names) ever sees it.
+// and texture coordinates where the file has them. Polygons are triangulated; points and lines are
+// refused, as a mesh made only of them has no surface to render. Only PLY: the file must start as
+// one, and assimp reads it from memory with its PLY importer alone, so no other format's importer
+// (some of which open further files the first one names) ever sees it.
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -17,6 +17,7 @@ namespace farm {
 struct PlyMesh {
   std::vector<Vec3f> positions;
   std::vector<Vec3f> normals;     // one per position, or empty when the file has none
+  std::vector<Vec2f> uvs;         // texture coordinates (u, v) as the file has them, or empty
   std::vector<uint32_t> indices;  // three per triangle
 };
 
