@@ -333,6 +333,16 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
 
 std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& settings) {
   SceneDescription desc = loadSceneDescription(path);
+  // Path-space MLT and ERPT mutate paths with the camera vertex held where their seed put it:
+  // with a lens, the lens point would never move and the chains would not be ergodic.
+  if (desc.camera.lensRadius > 0 &&
+      (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
+    throw SceneLoadError(path, 0,
+                         std::string("a thin lens camera is not supported by ") +
+                             algorithmName(settings.algorithm) +
+                             " yet (its mutations keep each seed's lens point): use pt, bdpt, "
+                             "pssmlt, pssmlt-pt or mmlt");
+  }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);
   }

@@ -2,9 +2,15 @@
 
 #include <cmath>
 
+#include "common/sampling/warp.h"
+
 namespace farm {
 
-Camera::Camera(const CameraDescription& desc) : width_(desc.width), height_(desc.height) {
+Camera::Camera(const CameraDescription& desc)
+    : width_(desc.width),
+      height_(desc.height),
+      lensRadius_(desc.lensRadius),
+      focusDistance_(desc.focusDistance) {
   const Matrix4& m = desc.toWorld;
   position_ = m.applyPoint(Vec3f(0, 0, 0));
   forward_ = normalize(m.applyVector(Vec3f(0, 0, 1)));
@@ -42,19 +48,40 @@ Camera::Camera(const CameraDescription& desc) : width_(desc.width), height_(desc
   planeArea_ = 4 * tanHalfX_ * tanHalfY_;
 }
 
-Ray Camera::generateRay(const Vec2f& film) const {
+Vec3f Camera::lensPoint(const Vec2f& uLens) const {
+  if (!hasLens()) return position_;
+  Vec2f disk = squareToConcentricDisk(uLens);
+  return position_ + (right_ * disk.x + up_ * disk.y) * lensRadius_;
+}
+
+Ray Camera::generateRay(const Vec2f& film, const Vec3f& lensPoint) const {
   float sx = (2 * film.x / width_ - 1) * tanHalfX_;
   float sy = (1 - 2 * film.y / height_) * tanHalfY_;
+  Vec3f pinhole = forward_ + right_ * sx + up_ * sy;
   Ray r;
-  r.o = position_;
-  r.d = normalize(forward_ + right_ * sx + up_ * sy);
+  r.o = lensPoint;
+  if (!hasLens()) {
+    r.d = normalize(pinhole);
+  } else {
+    // Towards the focus plane's point that the pinhole sees through the film point.
+    const Vec3f focus = position_ + pinhole * focusDistance_;
+    r.d = normalize(focus - lensPoint);
+  }
   return r;
 }
 
-bool Camera::project(const Vec3f& d, Vec2f* film) const {
+bool Camera::project(const Vec3f& lensPoint, const Vec3f& d, Vec2f* film) const {
   float c = dot(d, forward_);
   if (c <= 0) return false;
-  float sx = dot(d, right_) / c, sy = dot(d, up_) / c;
+  Vec3f dir = d;
+  if (hasLens()) {
+    // Where the ray meets the focus plane, seen from the lens's centre.
+    const Vec3f offset = lensPoint - position_;
+    dir = offset + d * (focusDistance_ / c);
+    c = dot(dir, forward_);
+    if (!(c > 0)) return false;
+  }
+  float sx = dot(dir, right_) / c, sy = dot(dir, up_) / c;
   float fx = (sx / tanHalfX_ + 1) * 0.5f * width_;
   float fy = (1 - sy / tanHalfY_) * 0.5f * height_;
   if (!(fx >= 0 && fx < width_ && fy >= 0 && fy < height_)) return false;
@@ -62,9 +89,9 @@ bool Camera::project(const Vec3f& d, Vec2f* film) const {
   return true;
 }
 
-float Camera::importance(const Vec3f& d) const {
+float Camera::importance(const Vec3f& lensPoint, const Vec3f& d) const {
   Vec2f film;
-  if (!project(d, &film)) return 0;
+  if (!project(lensPoint, d, &film)) return 0;
   float c = dot(d, forward_);
   return 1 / (planeArea_ * c * c * c);
 }

@@ -23,6 +23,10 @@ struct CameraDescription {
   FovAxis fovAxis = FovAxis::X;
   int width = 768, height = 576;  // film size in pixels
   FilterType filter = FilterType::Tent;
+  // Thin lens (Mitsuba's thinlens, pbrt's lensradius): a lens disk of this radius, focused at
+  // this distance along the view direction; 0: a pinhole.
+  float lensRadius = 0;
+  float focusDistance = 1;
 };
 
 enum class MicrofacetDistribution { Beckmann, GGX };

@@ -93,13 +93,18 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
 int BidirectionalTracer::traceCameraSubpath(const Vec2f& film, Sampler& sampler, int maxVertices,
                                             bool roulette, PathVertex* path) const {
   const Camera& camera = scene_.camera();
-  Ray ray = camera.generateRay(film);
+  // A thin lens's point, uniformly on its disk (its density is common to every strategy).
+  const Vec3f lens =
+      camera.hasLens()
+          ? camera.lensPoint({sampler.next(kCameraStream), sampler.next(kCameraStream)})
+          : camera.position();
+  Ray ray = camera.generateRay(film, lens);
   PathVertex& c = path[0];
   c = PathVertex();
   c.kind = PathVertex::Kind::Camera;
-  c.p = camera.position();
+  c.p = lens;
   c.beta = Spectrum(1.0f);  // We / pdf = 1: film points are sampled uniformly
-  float pdfDir = camera.importance(ray.d);
+  float pdfDir = camera.importance(lens, ray.d);
   return randomWalk(ray, Spectrum(1.0f), pdfDir, sampler, kCameraStream, TransportMode::Radiance,
                     maxVertices, roulette, path);
 }
@@ -148,26 +153,27 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   }
   const PathVertex& y = lightPath[s - 1];
   if (y.delta) return Spectrum(0.0f);
-  if (t == 1) {  // light tracing: connect to the camera and splat where it projects
+  if (t == 1) {  // light tracing: connect to the camera (its lens point) and splat there
     const Camera& camera = scene_.camera();
-    Vec3f toCamera = camera.position() - y.p;
+    const Vec3f& lens = cameraPath[0].p;
+    Vec3f toCamera = lens - y.p;
     float d2 = lengthSquared(toCamera);
     if (!(d2 > 0)) return Spectrum(0.0f);
     Vec3f w = toCamera / std::sqrt(d2);
-    if (!camera.project(-w, film)) return Spectrum(0.0f);
-    float We = camera.importance(-w);
+    if (!camera.project(lens, -w, film)) return Spectrum(0.0f);
+    float We = camera.importance(lens, -w);
     Spectrum f;
     if (s == 1) {
       f = dot(y.n, w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
     } else {
       if (!sidesAgree(w, y.n, y.ns)) return Spectrum(0.0f);
       Frame frame(y.ns);
-      f = scene_.bsdfAt(y.shape, y.uv).eval(frame.toLocal(y.wo), frame.toLocal(w),
-                                      TransportMode::Importance);
+      f = scene_.bsdfAt(y.shape, y.uv)
+              .eval(frame.toLocal(y.wo), frame.toLocal(w), TransportMode::Importance);
     }
     if (isBlack(f)) return Spectrum(0.0f);
     ++rays_;
-    if (!scene_.visible(y.p, y.n, camera.position(), Vec3f(0.0f))) return Spectrum(0.0f);
+    if (!scene_.visible(y.p, y.n, lens, Vec3f(0.0f))) return Spectrum(0.0f);
     return y.beta * f * (We * lightEndCosine(y, w, s) / d2 * camera.pixelCount());
   }
   const PathVertex& z = cameraPath[t - 1];
@@ -186,7 +192,8 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   } else {
     if (!sidesAgree(-w, y.n, y.ns)) return Spectrum(0.0f);
     Frame fy(y.ns);
-    f *= scene_.bsdfAt(y.shape, y.uv).eval(fy.toLocal(y.wo), fy.toLocal(-w), TransportMode::Importance);
+    f *= scene_.bsdfAt(y.shape, y.uv)
+             .eval(fy.toLocal(y.wo), fy.toLocal(-w), TransportMode::Importance);
   }
   if (isBlack(f)) return Spectrum(0.0f);
   // The camera side's cosine is the shading one (the rendering equation's); the light side's
@@ -240,7 +247,7 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     // x_{s-1} sampled from the camera side: from z (whose predecessor is z_{t-2}).
     Vec3f w = directionTo(z->p, y->p);
     if (t == 1) {
-      pE[s - 1] = toAreaDensity(scene_.camera().importance(w), z->p, *y);
+      pE[s - 1] = toAreaDensity(scene_.camera().importance(z->p, w), z->p, *y);
     } else {
       Frame fz(z->ns);
       float pdf = scene_.bsdfAt(z->shape, z->uv).pdf(fz.toLocal(z->wo), fz.toLocal(w));

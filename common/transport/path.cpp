@@ -127,8 +127,9 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
   const PathVertex& last = vertices[size_t(k - 1)];
   w = direction(k - 1, k, &d2);
   const Camera& cam = scene.camera();
-  if (!cam.project(-w, &out.film)) return out;
-  f.multiply(double(cam.importance(-w)) * double(absDot(last.n, w)) / d2 *
+  const Vec3f& lens = vertices[size_t(k)].p;
+  if (!cam.project(lens, -w, &out.film)) return out;
+  f.multiply(double(cam.importance(lens, -w)) * double(absDot(last.n, w)) / d2 *
              double(cam.pixelCount()));
   if (!f.finish(&out)) out.logLuminance = -INFINITY;
   return out;

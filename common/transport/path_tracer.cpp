@@ -122,6 +122,14 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
   }
 }
 
+Ray PathTracer::primaryRay(const Vec2f& film, Sampler& sampler) const {
+  const Camera& camera = scene_.camera();
+  if (!camera.hasLens()) return camera.generateRay(film);
+  // A thin lens's point, uniformly on its disk.
+  return camera.generateRay(
+      film, camera.lensPoint({sampler.next(kCameraStream), sampler.next(kCameraStream)}));
+}
+
 Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
   Spectrum L(0.0f);
   walk(primary, sampler, nullptr, [&](const Spectrum& value, const PathVertex*) { L += value; });
@@ -132,7 +140,7 @@ void PathTracer::visitPaths(const Vec2f& film, Sampler& sampler,
                             const std::function<void(const TracedPath&)>& visit) const {
   thread_local std::vector<PathVertex> vertices;
   const float pixelCount = scene_.camera().pixelCount();
-  walk(scene_.camera().generateRay(film), sampler, &vertices,
+  walk(primaryRay(film, sampler), sampler, &vertices,
        [&](const Spectrum& value, const PathVertex* light) {
          // The camera side in walk order is camera, x_1, x_2, ...: reversed, light first.
          thread_local std::vector<PathVertex> reversed;
@@ -142,8 +150,7 @@ void PathTracer::visitPaths(const Vec2f& film, Sampler& sampler,
 }
 
 void PathTracer::sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const {
-  Ray r = scene_.camera().generateRay(film);
-  Spectrum L = radiance(r, sampler);
+  Spectrum L = radiance(primaryRay(film, sampler), sampler);
   if (!isBlack(L)) splats->push_back({film, L * scene_.camera().pixelCount()});
 }
 

@@ -19,6 +19,9 @@ class PathTracer {
 
   // Radiance arriving at the camera along r.
   Spectrum radiance(const Ray& r, Sampler& sampler) const;
+  // The camera ray through `film`: from a thin lens's point (two samples of the camera stream)
+  // or the pinhole.
+  Ray primaryRay(const Vec2f& film, Sampler& sampler) const;
   // One camera sample at `film`: appends the splat A_px * L (see Camera).
   void sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const;
 

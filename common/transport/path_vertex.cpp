@@ -64,7 +64,8 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
   // rest by BSDF sampling at their successor. The pinhole itself has no density (pE = 0).
   const PathVertex& camera = *x[n - 1];
   Vec3f toFirst = normalize(x[n - 2]->p - camera.p);
-  pE[n - 2] = toAreaDensity(scene.camera().importance(toFirst), camera.p, x[n - 2]->p, x[n - 2]->n);
+  pE[n - 2] = toAreaDensity(scene.camera().importance(camera.p, toFirst), camera.p, x[n - 2]->p,
+                            x[n - 2]->n);
   for (int i = n - 3; i >= 0; --i) {
     const PathVertex& next = *x[i + 1];
     pE[i] = toAreaDensity(scatterPdf(scene, next, x[i + 2]->p, x[i]->p, false), next.p, x[i]->p,

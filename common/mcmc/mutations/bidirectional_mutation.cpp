@@ -150,7 +150,7 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
     if (at.kind == PathVertex::Kind::Camera) {
       const Camera& camera = scene.camera();
       Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
-      if (!traceVertex(context_, at, camera.generateRay(film).d, &v)) return false;
+      if (!traceVertex(context_, at, camera.generateRay(film, at.p).d, &v)) return false;
     } else {
       const PathVertex& from = j == 0 ? suffix(1) : (j == 1 ? suffix(0) : grown[size_t(j - 2)]);
       if (!scatterStep(context_, at, from, TransportMode::Radiance, rng, &v)) return false;

@@ -18,7 +18,7 @@ bool joinable(const Scene& scene, const Path& x, int m) {
 
 bool filmPoint(const Camera& camera, const Path& x, Vec2f* film) {
   const int k = x.length();
-  return camera.project(normalize(x[k - 1].p - x[k].p), film);
+  return camera.project(x[k].p, normalize(x[k - 1].p - x[k].p), film);
 }
 
 }  // namespace
@@ -42,7 +42,7 @@ bool perturbLensChain(const MutationContext& context, const PerturbationSizes& s
     return false;
   *y = x;
   const int k = x.length();
-  return followSpecularChain(context, x, y, k, m, camera.generateRay(moved).d);
+  return followSpecularChain(context, x, y, k, m, camera.generateRay(moved, x[k].p).d);
 }
 
 bool LensPerturbation::propose(const Path& x, Rng& rng, Path* y, MutationRecord* record) const {
@@ -65,7 +65,7 @@ double logLensChainDensity(const MutationContext& context, const PerturbationSiz
   double logT = logFilmPerturbationDensity(r, sizes.r1, sizes.r2);
   // Film to direction: a uniform film point has direction density We, so a film density p
   // becomes p A_px We; then to area at to[k-1], and through each specular vertex.
-  const double we = camera.importance(normalize(to[k - 1].p - to[k].p));
+  const double we = camera.importance(to[k].p, normalize(to[k - 1].p - to[k].p));
   logT += std::log(double(camera.pixelCount()) * we * geometricConversion(to[k], to[k - 1]));
   for (int j = k - 2; j >= m; --j) {
     if (!to.isSpecular(scene, j + 1)) return -INFINITY;

@@ -38,7 +38,7 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
   std::vector<PathVertex> walk;  // from the camera towards the light
   const PathVertex& eye = x.vertices.back();
   Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
-  Vec3f w = camera.generateRay(film).d;
+  Vec3f w = camera.generateRay(film, eye.p).d;
   PathVertex previous = eye;
   for (;;) {
     PathVertex v;

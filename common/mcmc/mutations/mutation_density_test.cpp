@@ -178,7 +178,7 @@ Path backWallPath(const Scene& scene, int maxDepth) {
     const PathVertex& v = x[k - 1];
     if (absDot(v.n, camera.forward()) < 0.99f) return false;  // square to the camera
     Vec2f film;
-    if (!camera.project(normalize(v.p - camera.position()), &film)) return false;
+    if (!camera.project(camera.position(), normalize(v.p - camera.position()), &film)) return false;
     return std::fabs(film.x - 0.5f * camera.width()) < 2 && film.y < 0.45f * camera.height() &&
            film.y > 0.3f * camera.height();
   });

@@ -3,8 +3,11 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <stdexcept>
 #include <vector>
 
@@ -22,18 +25,27 @@ float decodeSrgb(float v) {
 
 std::shared_ptr<TextureImage> readTextureImage(const std::string& bytes, const std::string& name,
                                                TextureEncoding encoding) {
-  // The reader for the name's extension, fed from memory. Not ImageInput::open(name, config,
-  // proxy): that one opens a file of that name on disk when there is one, proxy or not.
+  // Only the formats textures come in: every other reader OpenImageIO has would be one more
+  // parser of untrusted bytes in the coordinator.
   std::string extension = fs::path(name).extension().string();
-  if (extension.size() < 2) throw std::runtime_error("no file extension to tell the format");
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  static const char* const kFormats[] = {".png", ".jpg", ".jpeg", ".exr", ".hdr", ".tga", ".pfm"};
+  if (std::find(std::begin(kFormats), std::end(kFormats), extension) == std::end(kFormats))
+    throw std::runtime_error("'" + extension +
+                             "' is not a texture format (png, jpg, jpeg, exr, hdr, tga, pfm)");
+  // The reader for the extension, fed from memory. Not ImageInput::open(name, config, proxy):
+  // that one opens a file of that name on disk when there is one, proxy or not. The proxy is
+  // declared first so that it outlives the reader, which closes through it.
+  OIIO::Filesystem::IOMemReader reader(const_cast<char*>(bytes.data()), bytes.size());
   auto in = OIIO::ImageInput::create(extension.substr(1));
   if (!in) throw std::runtime_error("no reader for '" + extension + "' images");
   if (!in->supports("ioproxy"))
     throw std::runtime_error("'" + extension + "' images cannot be read from memory");
-  OIIO::Filesystem::IOMemReader reader(const_cast<char*>(bytes.data()), bytes.size());
   in->set_ioproxy(&reader);
-  OIIO::ImageSpec spec;
-  if (!in->open("memory" + extension, spec)) {
+  OIIO::ImageSpec spec, config;
+  // Colour as stored, not multiplied by alpha (pbrt reads RGB and ignores alpha).
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  if (!in->open("memory" + extension, spec, config)) {
     std::string reason = in->geterror();
     throw std::runtime_error(reason.empty() ? "not a readable image" : reason);
   }
@@ -43,7 +55,9 @@ std::shared_ptr<TextureImage> readTextureImage(const std::string& bytes, const s
   if ((long long)spec.width * spec.height > kMaxTexels)
     throw std::runtime_error(std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                              " texels is over the limit of 2^28");
-  const int channels = spec.nchannels;
+  // Grey (one or two channels: grey and alpha) is replicated; from three on, the first three
+  // are RGB. Only those are read.
+  const int read = spec.nchannels < 3 ? 1 : 3;
   const bool integer = spec.format.basetype == OIIO::TypeDesc::UINT8 ||
                        spec.format.basetype == OIIO::TypeDesc::UINT16;
   const bool srgb =
@@ -52,30 +66,29 @@ std::shared_ptr<TextureImage> readTextureImage(const std::string& bytes, const s
   image->width = spec.width;
   image->height = spec.height;
   const size_t texels = size_t(spec.width) * size_t(spec.height);
-  // Grey (one or two channels) is replicated; from three channels on, the first three are RGB.
-  auto channelOf = [&](int c) { return channels < 3 ? 0 : c; };
   if (spec.format.basetype == OIIO::TypeDesc::UINT8) {
-    std::vector<uint8_t> raw(texels * size_t(channels));
-    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, raw.data()))
-      throw std::runtime_error(in->geterror());
     image->bytes.resize(texels * 3);
-    for (size_t i = 0; i < texels; ++i)
-      for (int c = 0; c < 3; ++c) image->bytes[3 * i + c] = raw[i * channels + channelOf(c)];
+    if (!in->read_image(0, 0, 0, read, OIIO::TypeDesc::UINT8, image->bytes.data(), 3))
+      throw std::runtime_error(in->geterror());
+    if (read == 1)
+      for (size_t i = 0; i < texels; ++i)
+        image->bytes[3 * i + 1] = image->bytes[3 * i + 2] = image->bytes[3 * i];
     image->srgb = srgb;
     return image;
   }
-  std::vector<float> raw(texels * size_t(channels));
-  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, raw.data()))
-    throw std::runtime_error(in->geterror());
   image->floats.resize(texels * 3);
+  if (!in->read_image(0, 0, 0, read, OIIO::TypeDesc::FLOAT, image->floats.data(),
+                      3 * sizeof(float)))
+    throw std::runtime_error(in->geterror());
   for (size_t i = 0; i < texels; ++i) {
+    if (read == 1) image->floats[3 * i + 1] = image->floats[3 * i + 2] = image->floats[3 * i];
     for (int c = 0; c < 3; ++c) {
-      float v = raw[i * channels + channelOf(c)];
+      float& v = image->floats[3 * i + c];
       if (!std::isfinite(v) || v < 0)
         throw std::runtime_error("texel (" + std::to_string(i % spec.width) + ", " +
                                  std::to_string(i / spec.width) +
                                  ") is negative or not finite: not a reflectance");
-      image->floats[3 * i + c] = srgb ? decodeSrgb(v) : v;
+      if (srgb) v = decodeSrgb(v);
     }
   }
   return image;

@@ -572,8 +572,9 @@ class MitsubaLoader {
 
   void parseSensor(const pugi::xml_node& node) {
     std::string type = node.attribute("type").as_string();
-    if (type != "perspective")
-      fail(node, "unknown or unsupported sensor type '" + type + "' (only perspective)");
+    if (type != "perspective" && type != "thinlens")
+      fail(node,
+           "unknown or unsupported sensor type '" + type + "' (perspective and thinlens only)");
     registerId(node, "sensor", 0);
     std::vector<pugi::xml_node> nested;
     PropertySet props = collectProperties(node, &nested);
@@ -633,6 +634,17 @@ class MitsubaLoader {
       cam.fovAxis = FovAxis::Diagonal;
     }
     cam.fovDegrees = float(fov);
+    if (type == "thinlens") {
+      // Mitsuba's thinlens: an aperture of this radius, focused at this world-space distance.
+      for (const char* name : {"apertureRadius", "focusDistance"}) {
+        pugi::xml_node n = props.take(name);
+        if (!n) fail(node, std::string("a thinlens sensor needs <float name=\"") + name + "\">");
+        requireTag(n, {"float", "integer"});
+        double v = number(n, requireValue(n), std::string("parameter '") + name + "'");
+        if (!(v > 0)) fail(n, std::string(name) + " must be > 0");
+        (name[0] == 'a' ? cam.lensRadius : cam.focusDistance) = float(v);
+      }
+    }
     // Clip planes, shutter times and focus distance do not change a pinhole render.
   }
 

@@ -390,6 +390,27 @@ TEST(MitsubaLoaderTest, MirroringTransformKeepsOrientation) {
   }
 }
 
+TEST(MitsubaLoaderTest, ThinlensSensor) {
+  TempDir dir;
+  auto sensor = [&](const std::string& params) {
+    return dir.write("s.xml", sceneXml("<sensor type=\"thinlens\">\n" + params +
+                                       "</sensor>\n<shape type=\"rectangle\"/>\n"));
+  };
+  SceneDescription s = loadMitsubaScene(
+      sensor("<float name=\"apertureRadius\" value=\"0.2\"/><float name=\"focusDistance\" "
+             "value=\"7\"/>\n"));
+  EXPECT_FLOAT_EQ(s.camera.lensRadius, 0.2f);
+  EXPECT_FLOAT_EQ(s.camera.focusDistance, 7.0f);
+  EXPECT_EQ(loadMitsubaScene(scenePath("cornell-box")).camera.lensRadius, 0);
+  EXPECT_NE(loadError(sensor("<float name=\"apertureRadius\" value=\"0.2\"/>\n"))
+                .find("needs <float name=\"focusDistance\">"),
+            std::string::npos);
+  EXPECT_NE(loadError(sensor("<float name=\"apertureRadius\" value=\"-1\"/><float "
+                             "name=\"focusDistance\" value=\"7\"/>\n"))
+                .find("apertureRadius must be > 0"),
+            std::string::npos);
+}
+
 TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   TempDir dir;
   std::string xml = dir.write("s.xml", sceneXml(R"(<integrator type="path"/>

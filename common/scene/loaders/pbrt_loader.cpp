@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
+#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -45,6 +47,12 @@ const NamedMetal kNamedMetals[] = {
     {"MgO", {2.0895885542f, 1.6507224525f, 1.5948759692f}, {0.0f, 0.0f, 0.0f}},
     {"TiO2", {3.4566203131f, 2.8017076558f, 2.9051485020f}, {0.0001026662f, 0.0f, 0.0006356902f}},
 };
+
+std::string formatNumber(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
 
 // pbrt-v3's TrowbridgeReitzDistribution::RoughnessToAlpha: a fit in log roughness.
 double roughnessToAlphaV3(double roughness) {
@@ -101,11 +109,18 @@ struct Attributes {
   AreaLight areaLight;
 };
 
+// A texture as its definition made it: built there (as pbrt does, so that it can name only
+// textures defined before it), or why it could not be, told when a material uses it.
 struct NamedTexture {
-  Directive directive;
-  bool isFloat = false;
-  int index = -1;  // in SceneDescription::textures once built
+  int index = -1;  // in SceneDescription::textures
+  std::string errorFile, error;
+  int errorLine = 0;
 };
+
+constexpr int kMaxTextureDepth = 16;             // nesting of checkerboard and scale textures
+constexpr size_t kMaxTextures = 100000;          // entries in SceneDescription::textures
+constexpr int kMaxIncludedFiles = 1000;          // Include and Import directives in all
+constexpr long long kMaxTexelBytes = 4ll << 30;  // decoded texture storage of a scene
 
 class PbrtLoader {
  public:
@@ -120,7 +135,12 @@ class PbrtLoader {
     scene_.camera.height = 720;
     scene_.camera.filter = FilterType::Box;
     scene_.maxDepth = 6;
+    includeStack_.push_back(fs::absolute(path_).lexically_normal().string());
     parseFile(text, path_, 0);
+    if (sawV4_ && !sawFilter_)
+      warn0(
+          "no PixelFilter: pbrt-v4's default gaussian filter is not supported, rendered with a "
+          "box filter");
     if (!sawWorld_) throw SceneLoadError(path_, 0, "no WorldBegin: the file describes no scene");
     if (!attributeStack_.empty())
       throw SceneLoadError(path_, 0, "AttributeBegin without AttributeEnd at the end of the file");
@@ -147,13 +167,20 @@ class PbrtLoader {
       ++i;
       readArguments(tokens, &i, &d);
       if (d.name == "Include" || d.name == "Import") {
+        if (d.name == "Import") sawV4_ = true;
         if (d.strings.size() != 1) fail(d, d.name + " takes one file name");
         if (depth + 1 > kMaxIncludeDepth)
-          fail(d, d.name + " nested deeper than " + std::to_string(kMaxIncludeDepth) +
-                      " files (an include cycle?)");
+          fail(d, d.name + " nested deeper than " + std::to_string(kMaxIncludeDepth) + " files");
+        if (++includedFiles_ > kMaxIncludedFiles)
+          fail(d, "more than " + std::to_string(kMaxIncludedFiles) + " included files");
         fs::path included = sceneFilePath(dir_, d.strings[0], "included file", d.file, d.line);
+        const std::string key = fs::absolute(included).lexically_normal().string();
+        if (std::find(includeStack_.begin(), includeStack_.end(), key) != includeStack_.end())
+          fail(d, d.name + " of '" + d.strings[0] + "' includes itself (an include cycle)");
+        includeStack_.push_back(key);
         parseFile(readSceneFile(included, "'" + d.strings[0] + "'", d.file, d.line),
                   (dir_ / d.strings[0]).string(), depth + 1);
+        includeStack_.pop_back();
         continue;
       }
       apply(d);
@@ -226,6 +253,7 @@ class PbrtLoader {
     while (!atEnd() && tokens[*i].kind == PbrtToken::Kind::Number)
       d->numbers.push_back(tokens[(*i)++].number);
     // The parameter list: "type name" value pairs.
+    std::set<std::string> names;
     while (!atEnd() && tokens[*i].kind == PbrtToken::Kind::String) {
       const PbrtToken& decl = tokens[(*i)++];
       Param p;
@@ -273,9 +301,8 @@ class PbrtLoader {
       if (!p.numbers.empty() && !p.strings.empty())
         throw SceneLoadError(d->file, p.line,
                              "parameter '" + p.name + "' mixes numbers and strings");
-      for (const Param& q : d->params.params)
-        if (q.name == p.name)
-          throw SceneLoadError(d->file, p.line, "parameter '" + p.name + "' given twice");
+      if (!names.insert(p.name).second)
+        throw SceneLoadError(d->file, p.line, "parameter '" + p.name + "' given twice");
       d->params.params.push_back(std::move(p));
     }
   }
@@ -294,6 +321,9 @@ class PbrtLoader {
     for (const Param& p : d.params.params)
       if (!p.used)
         failParam(d, p, what + ": parameter '" + p.type + " " + p.name + "' is not supported");
+  }
+  void warn0(const std::string& what) {
+    scene_.warnings.push_back(formatLoadMessage(path_, 0, what));
   }
   void warn(const Directive& d, const std::string& what) {
     scene_.warnings.push_back(formatLoadMessage(d.file, d.line, what));
@@ -564,8 +594,9 @@ class PbrtLoader {
     double fov = getFloat(d, "fov", 90);
     if (!(fov > 0 && fov < 180)) fail(d, "fov must be in (0, 180) degrees");
     double lensRadius = getFloat(d, "lensradius", 0);
-    getFloat(d, "focaldistance", 1e6);
-    if (lensRadius != 0) fail(d, "a thin lens (lensradius > 0) is not supported yet");
+    double focusDistance = getFloat(d, "focaldistance", 1e6);
+    if (!(lensRadius >= 0)) fail(d, "lensradius must be >= 0");
+    if (!(focusDistance > 0)) fail(d, "focaldistance must be > 0");
     getFloat(d, "shutteropen", 0);
     getFloat(d, "shutterclose", 1);
     rejectUnused(d, "Camera");
@@ -584,7 +615,23 @@ class PbrtLoader {
     for (int j = 0; j < 3; ++j)
       if (std::fabs(dot(axes[j], axes[(j + 1) % 3])) > 1e-4f)
         fail(d, "the camera transformation has a shear");
+    // pbrt scales its rays' directions by it: a non-uniform scale would stretch the view.
+    float lengths[3];
+    for (int j = 0; j < 3; ++j)
+      lengths[j] = length(cameraToWorld.applyVector(Vec3f(j == 0, j == 1, j == 2)));
+    if (std::fabs(lengths[0] - lengths[1]) > 1e-4f * lengths[2] ||
+        std::fabs(lengths[1] - lengths[2]) > 1e-4f * lengths[2])
+      fail(d, "the camera transformation has a non-uniform scale");
     scene_.camera.fovDegrees = float(fov);
+    // Lens radius and focus distance are in camera space: to world units by the (uniform)
+    // scale of the camera's transformation.
+    double scale = 0;
+    for (int j = 0; j < 3; ++j) {
+      Vec3f e(j == 0, j == 1, j == 2);
+      scale += length(cameraToWorld.applyVector(e)) / 3;
+    }
+    scene_.camera.lensRadius = float(lensRadius * scale);
+    scene_.camera.focusDistance = float(focusDistance * scale);
     scene_.camera.fovAxis = FovAxis::Smaller;  // pbrt's fov spans the shorter image axis
   }
 
@@ -596,6 +643,7 @@ class PbrtLoader {
     if (w < 1 || h < 1 || w > 65536 || h > 65536)
       fail(d, "film resolution " + std::to_string(w) + "x" + std::to_string(h) +
                   " is outside 1..65536");
+    if (w * h > (1ll << 28)) fail(d, "film of more than 2^28 pixels");
     getString(d, "filename", "");  // the farm names its own output
     rejectUnused(d, "Film");
     scene_.camera.width = int(w);
@@ -603,6 +651,7 @@ class PbrtLoader {
   }
 
   void parseFilter(Directive& d) {
+    sawFilter_ = true;
     const std::string& type = d.strings[0];
     // v3 names the radius "xwidth", v4 "xradius".
     auto radius = [&](const char* axis, double def) {
@@ -659,14 +708,21 @@ class PbrtLoader {
     const std::string& kind = d.strings[1];
     if (kind != "spectrum" && kind != "color" && kind != "float")
       fail(d, "texture type '" + kind + "' must be spectrum or float");
+    const bool isFloat = kind == "float";
     NamedTexture t;
-    t.directive = d;
-    t.isFloat = kind == "float";
-    // Built when a material uses it: a scene may declare textures it never reads.
-    (t.isFloat ? floatTextures_ : spectrumTextures_)[d.strings[0]] = std::move(t);
+    // A scene may declare textures it never reads (bump maps, say): what cannot be built is an
+    // error only where a material uses it.
+    try {
+      t.index = buildTexture(d, isFloat);
+    } catch (const SceneLoadError& e) {
+      t.errorFile = e.file();
+      t.errorLine = e.line();
+      t.error = e.problem();
+    }
+    (isFloat ? floatTextures_ : spectrumTextures_)[d.strings[0]] = std::move(t);
   }
 
-  // The index of named texture `name`, built on first use, for a parameter `p` of `user`.
+  // The index of named texture `name`, for a parameter `p` of `user`.
   int useTexture(const Directive& user, const Param& p, const std::string& name, bool isFloat) {
     auto& table = isFloat ? floatTextures_ : spectrumTextures_;
     auto it = table.find(name);
@@ -678,16 +734,22 @@ class PbrtLoader {
                       "' used where a " + (isFloat ? "float" : "spectrum") + " texture is needed");
       failParam(user, p, "texture '" + name + "' is not defined");
     }
-    if (it->second.index == -2) failParam(user, p, "texture '" + name + "' refers to itself");
-    if (it->second.index < 0) {
-      it->second.index = -2;
-      int index = buildTexture(it->second.directive, it->second.isFloat);
-      it->second.index = index;
-    }
+    if (it->second.index < 0)
+      throw SceneLoadError(it->second.errorFile, it->second.errorLine, it->second.error);
     return it->second.index;
   }
 
   int addTexture(TextureDescription t) {
+    int depth = 1;
+    for (int child : {t.tex1, t.tex2})
+      if (child >= 0) depth = std::max(depth, textureDepth_[size_t(child)] + 1);
+    if (depth > kMaxTextureDepth)
+      throw SceneLoadError(path_, 0,
+                           "textures nested deeper than " + std::to_string(kMaxTextureDepth) +
+                               " (" + t.origin + ")");
+    if (scene_.textures.size() >= kMaxTextures)
+      throw SceneLoadError(path_, 0, "more than " + std::to_string(kMaxTextures) + " textures");
+    textureDepth_.push_back(depth);
     scene_.textures.push_back(std::move(t));
     return int(scene_.textures.size()) - 1;
   }
@@ -721,7 +783,7 @@ class PbrtLoader {
     t->vOffset = float(getFloat(d, "vdelta", 0));
   }
 
-  int buildTexture(Directive d, bool isFloat) {
+  int buildTexture(Directive& d, bool isFloat) {
     const std::string& cls = d.strings[2];
     const std::string what = "texture '" + d.strings[0] + "' (" + cls + ")";
     TextureDescription t;
@@ -771,11 +833,17 @@ class PbrtLoader {
       auto cached = images_.find(key);
       if (cached == images_.end()) {
         std::string bytes = readSceneFile(path, "texture '" + filename + "'", d.file, d.line);
+        std::shared_ptr<TextureImage> image;
         try {
-          cached = images_.emplace(key, readTextureImage(bytes, filename, encoding)).first;
+          image = readTextureImage(bytes, filename, encoding);
         } catch (const std::exception& e) {
           fail(d, "cannot read texture '" + filename + "': " + e.what());
         }
+        texelBytes_ += (long long)(image->bytes.size() + image->floats.size() * sizeof(float));
+        if (texelBytes_ > kMaxTexelBytes)
+          fail(d, "the scene's textures take more than " + std::to_string(kMaxTexelBytes >> 30) +
+                      " GiB decoded");
+        cached = images_.emplace(key, std::move(image)).first;
       }
       t.type = TextureDescription::Type::Image;
       t.image = cached->second;
@@ -830,7 +898,7 @@ class PbrtLoader {
 
   // Roughness of a (rough) conductor or dielectric as alpha, or 0 for a smooth one. v3's
   // materials remap with a polynomial, v4's with a square root; both have remaproughness.
-  double roughness(Directive& d, bool v4, double def) {
+  double roughness(Directive& d, bool v4, double def, bool metalV3 = false) {
     for (const char* name : {"roughness", "uroughness", "vroughness"}) {
       Param* p = d.params.find(name);
       if (p && p->type == "texture") failParam(d, *p, "textured roughness is not supported");
@@ -842,12 +910,15 @@ class PbrtLoader {
     if (!(u >= 0)) fail(d, "roughness must be >= 0");
     bool remap = getBool(d, "remaproughness", true);
     double alpha = remap ? (v4 ? std::sqrt(u) : roughnessToAlphaV3(u)) : u;
-    // pbrt-v4 renders microfacets of alpha below 1e-3 as smooth; v3 has no smooth metal.
-    if (u == 0 || (v4 && alpha < 1e-3)) return 0;
+    // pbrt-v4 renders microfacets of alpha below 1e-3 as smooth. v3 remaps roughness 0 to
+    // its clamp 1e-3 (alpha 0.047) for metal, and has a smooth path for glass only.
+    if (v4 ? alpha < 1e-3 : (alpha == 0 || (u == 0 && !metalV3))) return 0;
     return alpha;
   }
 
   int makeMaterial(Directive& d, const std::string& type) {
+    if (type == "diffuse" || type == "conductor" || type == "dielectric" || type == "coateddiffuse")
+      sawV4_ = true;
     const std::string what = "material '" + type + "'";
     for (const char* bump : {"bumpmap", "displacement"})
       if (d.params.has(bump))
@@ -870,7 +941,7 @@ class PbrtLoader {
       b.k = kNamedMetals[3].k;
       getSpectrum(d, "eta", &b.eta);
       getSpectrum(d, "k", &b.k);
-      double alpha = roughness(d, v4, v4 ? 0.0 : 0.01);
+      double alpha = roughness(d, v4, v4 ? 0.0 : 0.01, !v4);
       b.twoSided = true;
       b.extEta = 1.0f;
       if (alpha > 0) {
@@ -1029,8 +1100,8 @@ class PbrtLoader {
       }
       for (double v : idx)
         if (v < 0 || v >= double(nv) || v != std::floor(v))
-          fail(d, what + ": index " + std::to_string((long long)v) + " is not one of the " +
-                      std::to_string(nv) + " vertices");
+          fail(d, what + ": index " + formatNumber(v) + " is not one of the " + std::to_string(nv) +
+                      " vertices");
       if (bilinear) {
         // Patches p00 p10 p01 p11; a planar one is exactly two triangles.
         for (size_t q = 0; q < idx.size(); q += 4) {
@@ -1059,6 +1130,7 @@ class PbrtLoader {
         fail(d, what + " has a textured material but no uv");
       }
       const bool hasNormals = !normals.empty();
+      if (hasNormals && flipWithoutNormals) warnOrientation(d);
       finishMesh(d.file, d.line, what, toWorld, !hasNormals,
                  hasNormals ? false : flipWithoutNormals, std::move(positions), std::move(normals),
                  std::move(uvs), &shape, &scene_.warnings);
@@ -1087,6 +1159,7 @@ class PbrtLoader {
         fail(d, what + " '" + filename + "' has a textured material but no texture coordinates");
       shape.indices = std::move(mesh.indices);
       const bool hasNormals = !mesh.normals.empty();
+      if (hasNormals && flipWithoutNormals) warnOrientation(d);
       finishMesh(d.file, d.line, "PLY '" + filename + "'", toWorld, !hasNormals,
                  hasNormals ? false : flipWithoutNormals, std::move(mesh.positions),
                  std::move(mesh.normals), std::move(mesh.uvs), &shape, &scene_.warnings);
@@ -1138,6 +1211,14 @@ class PbrtLoader {
     scene_.shapes.push_back(std::move(shape));
   }
 
+  // pbrt-v3 turns a mesh with normals round under ReverseOrientation (or a mirror), v4 does not:
+  // the farm follows v4 (the normals decide) and says so, as it decides where a light shines.
+  void warnOrientation(const Directive& d) {
+    warn(d,
+         "mesh with normals under ReverseOrientation or a mirroring transform: oriented by its "
+         "normals, as pbrt-v4 does (pbrt-v3 would turn it round)");
+  }
+
   // The uniform scale of a rotation-scale-translation matrix: spheres stay analytic.
   double similarityScale(const Directive& d, const Matrix4& t) const {
     double len[3];
@@ -1166,6 +1247,11 @@ class PbrtLoader {
   std::map<std::string, int> namedMaterials_;
   std::map<std::string, NamedTexture> spectrumTextures_, floatTextures_;
   std::map<std::string, std::shared_ptr<TextureImage>> images_;
+  std::vector<int> textureDepth_;  // per texture: 1 + its deepest child's
+  long long texelBytes_ = 0;
+  int includedFiles_ = 0;
+  std::vector<std::string> includeStack_;
+  bool sawFilter_ = false, sawV4_ = false;
   std::map<std::string, PlyMesh> plyCache_;
   int defaultMaterial_ = -1;
 };

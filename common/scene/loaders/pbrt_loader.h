@@ -2,9 +2,9 @@
 // pbrt-v3 and pbrt-v4 scene files (the common subset of published scenes) to a
 // SceneDescription in world space.
 //
-// Supported: Camera "perspective" (fov; lensradius 0), Film (resolution), PixelFilter box of
-// radius 0.5 and triangle of radius 1, Integrator maxdepth (of any unbiased integrator: the farm
-// picks the algorithm), Sampler and Accelerator (ignored); Transform, ConcatTransform,
+// Supported: Camera "perspective" (fov, lensradius, focaldistance), Film (resolution), PixelFilter
+// box of radius 0.5 and triangle of radius 1, Integrator maxdepth (of any unbiased integrator: the
+// farm picks the algorithm), Sampler and Accelerator (ignored); Transform, ConcatTransform,
 // Translate, Rotate, Scale, LookAt, Identity, CoordinateSystem, CoordSysTransform,
 // TransformBegin/End, AttributeBegin/End, ReverseOrientation; Include and Import; Material,
 // MakeNamedMaterial, NamedMaterial with matte/diffuse, metal/conductor (rgb or named metal

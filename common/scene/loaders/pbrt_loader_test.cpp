@@ -252,9 +252,11 @@ TEST(PbrtLoader, MaterialsOfBothVersions) {
       kTriangle + "Material \"mirror\"\n" + kTriangle +
       "MakeNamedMaterial \"red\" \"string type\" \"matte\" \"rgb Kd\" [0.9 0 0]\n"
       "NamedMaterial \"red\"\n" +
-      kTriangle;
+      kTriangle +
+      // v3 metal of roughness 0: remapped from its clamp 1e-3, so still rough (alpha 0.047)
+      "Material \"metal\" \"float roughness\" 0\n" + kTriangle;
   SceneDescription s = loadPbrtScene(dir.write("s.pbrt", scene(world)));
-  ASSERT_EQ(s.shapes.size(), 9u);
+  ASSERT_EQ(s.shapes.size(), 10u);
   auto bsdf = [&](int shape) { return s.bsdfs[size_t(s.shapes[size_t(shape)].bsdf)]; };
   EXPECT_EQ(bsdf(0).type, BsdfDescription::Type::Diffuse);
   EXPECT_TRUE(bsdf(0).twoSided);
@@ -280,6 +282,8 @@ TEST(PbrtLoader, MaterialsOfBothVersions) {
   EXPECT_EQ(bsdf(7).type, BsdfDescription::Type::Conductor);
   expectNear(bsdf(7).specularReflectance, Spectrum(0.9f), 0);
   expectNear(bsdf(8).reflectance, {0.9f, 0, 0}, 0);
+  EXPECT_EQ(bsdf(9).type, BsdfDescription::Type::RoughConductor);
+  EXPECT_NEAR(bsdf(9).alpha, 0.04718, 1e-4);
 }
 
 TEST(PbrtLoader, ImageTexturesAndTheirEncodings) {
@@ -412,7 +416,20 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
       {"Shape \"trianglemesh \"point P\" [0 0 0 1 0 0 0 1 0]\n", 5, "unterminated string"},
       {"Shape \"trianglemesh\" \"P\" [0 0 0 1 0 0 0 1 0]\n", 5, "not a parameter declaration"},
       {"Shape \"trianglemesh\" \"float P\" [0 0 0 1 0 0 0 1 0]\n", 5, "must be of type point3"},
-      {"Include \"loop.pbrt\"\n", 1, "nested deeper than 16 files"},
+      {"Include \"loop.pbrt\"\n", 1, "includes itself (an include cycle)"},
+      {"Include \"deep0.pbrt\"\n", 1, "nested deeper than 16 files"},
+      // Textures name only textures defined before them (as in pbrt); the error is told
+      // where a material uses one.
+      {"Texture \"a\" \"spectrum\" \"scale\" \"texture tex1\" \"b\"\n"
+       "Texture \"b\" \"spectrum\" \"constant\"\n"
+       "Material \"matte\" \"texture Kd\" \"a\"\n",
+       5, "texture 'b' is not defined"},
+      {"Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"junk.tif\"\n"
+       "Material \"matte\" \"texture Kd\" \"t\"\n",
+       5, "not a texture format"},
+      {"Translate 1e39 0 0\n", 5, "beyond the range of float"},
+      {"Material \"metal\" \"rgb eta\" [1 1 3.5e38] \"rgb k\" [1 1 1]\n", 5,
+       "beyond the range of float"},
       {"Include \"../elsewhere.pbrt\"\n", 5, "outside the scene's folder"},
       {"", 0, "the scene has no shapes"},
   };
@@ -420,6 +437,10 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
     TempDir dir;
     dir.write("junk.png", "this is not an image");
     dir.write("loop.pbrt", "Include \"loop.pbrt\"\n");
+    dir.write("junk.tif", "this is not an image");
+    for (int k = 0; k < 20; ++k)
+      dir.write("deep" + std::to_string(k) + ".pbrt",
+                "Include \"deep" + std::to_string(k + 1) + ".pbrt\"\n");
     std::string path = dir.write("s.pbrt", scene(c.world));
     std::string error = loadError(path);
     const std::string place = c.line > 0 ? ":" + std::to_string(c.line) + ": " : std::string(": ");
@@ -431,11 +452,14 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
 TEST(PbrtLoader, HeaderErrors) {
   const BadScene cases[] = {
       {"Camera \"orthographic\"\n", 4, "camera 'orthographic' is not supported"},
-      {"Camera \"perspective\" \"float lensradius\" 0.1\n", 4, "thin lens"},
+      {"Camera \"perspective\" \"float lensradius\" -0.1\n", 4, "lensradius must be >= 0"},
+      {"Camera \"perspective\" \"float focaldistance\" 0\n", 4, "focaldistance must be > 0"},
       {"PixelFilter \"gaussian\"\n", 4, "pixel filter 'gaussian' is not supported"},
       {"PixelFilter \"triangle\"\n", 4, "radius 1 only"},  // v3's default radius is 2
       {"Film \"image\" \"float cropwindow\" [0 0.5 0 0.5]\n", 4, "cropwindow"},
       {"Film \"image\" \"integer xresolution\" 0\n", 4, "outside 1..65536"},
+      {"Film \"image\" \"integer xresolution\" 65536 \"integer yresolution\" 65536\n", 4,
+       "more than 2^28 pixels"},
       {"Integrator \"ambientocclusion\"\n", 4, "integrator 'ambientocclusion' is not supported"},
       {"Integrator \"path\" \"integer maxdepth\" -1\n", 4, "maxdepth must be >= 0"},
   };
@@ -456,6 +480,29 @@ TEST(PbrtLoader, HeaderErrors) {
   EXPECT_NE(loadError(dir.write("t.pbrt", "Camera \"perspective\"\n")).find("no WorldBegin"),
             std::string::npos);
   EXPECT_NE(loadError((dir.path() / "missing.pbrt").string()).find("scene file not found"),
+            std::string::npos);
+}
+
+TEST(PbrtLoader, HostileInputIsRefusedCheaply) {
+  TempDir dir;
+  // Scale textures nested 40 deep: evaluation would double per level with both children the
+  // same, and a long chain would exhaust the stack.
+  std::string world = "Texture \"t0\" \"spectrum\" \"constant\"\n";
+  for (int k = 1; k <= 40; ++k)
+    world += "Texture \"t" + std::to_string(k) + "\" \"spectrum\" \"scale\" \"texture tex1\" \"t" +
+             std::to_string(k - 1) + "\" \"texture tex2\" \"t" + std::to_string(k - 1) + "\"\n";
+  world += "Material \"matte\" \"texture Kd\" \"t40\"\n";
+  EXPECT_NE(loadError(dir.write("deep.pbrt", scene(world))).find("nested deeper than 16"),
+            std::string::npos);
+  // A NUL inside a string (a path that the check and the open would read differently).
+  std::string nul = "Shape \"plymesh\" \"string filename\" \"a";
+  nul += '\0';
+  nul += "/../../x.ply\"\n";
+  EXPECT_NE(loadError(dir.write("nul.pbrt", scene(nul))).find("NUL"), std::string::npos);
+  // A camera whose transformation stretches one axis.
+  EXPECT_NE(loadError(dir.write("scaled.pbrt", "Scale 1 2 1\nCamera \"perspective\"\nWorldBegin\n" +
+                                                   std::string(kTriangle)))
+                .find("non-uniform scale"),
             std::string::npos);
 }
 

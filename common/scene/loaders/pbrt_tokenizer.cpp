@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "common/scene/loaders/scene_files.h"
 
@@ -49,6 +50,7 @@ std::vector<PbrtToken> tokenizePbrt(const std::string& text, const std::string& 
           throw SceneLoadError(file, t.line, "unterminated string (a '\"' is missing)");
         char d = text[i++];
         if (d == '"') break;
+        if (d == '\0') throw SceneLoadError(file, line, "a NUL character in a string");
         if (d == '\\') {
           if (i >= n) throw SceneLoadError(file, line, "unterminated string");
           char e = text[i++];
@@ -86,6 +88,9 @@ std::vector<PbrtToken> tokenizePbrt(const std::string& text, const std::string& 
         auto [end, ec] = std::from_chars(first, last, t.number);
         if (ec != std::errc() || end != last || !std::isfinite(t.number))
           throw SceneLoadError(file, line, "'" + t.text + "' is not a finite number");
+        // Everything ends up in float (positions, colours, scales): it must be finite there too.
+        if (std::fabs(t.number) > double(std::numeric_limits<float>::max()))
+          throw SceneLoadError(file, line, "'" + t.text + "' is beyond the range of float");
         t.kind = PbrtToken::Kind::Number;
       } else if (std::isalpha(static_cast<unsigned char>(c))) {
         for (char d : t.text)

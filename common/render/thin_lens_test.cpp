@@ -1,0 +1,165 @@
+// A thin lens (tests/data/thin-lens: focused at 4 units; a checkerboard there fills the left
+// half of the view, one three times as far the right half):
+//  - path tracing and BDPT agree within their variance. BDPT's light-tracing strategies (t = 1)
+//    connect to the lens point its camera subpath sampled, and its MIS densities use it;
+//  - the in-focus board is sharp and the far one blurred. Sharpness is the product of two
+//    independent renders' horizontal pixel differences, averaged over a region: its expectation
+//    is the squared gradient of the expected image, noise cancels.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "common/mcmc/primary_sample_integrand.h"
+#include "common/render/local_render.h"
+#include "common/sampling/rng.h"
+#include "common/scene/loaders/scene_files.h"
+#include "common/scene/scene.h"
+#include "common/transport/bidirectional.h"
+#include "common/transport/sampler.h"
+
+namespace farm {
+namespace {
+
+const std::string kScene = std::string(FARM_TEST_DATA_DIR) + "/thin-lens/scene.pbrt";
+
+Image render(Algorithm algorithm, int64_t spp, uint64_t seed, float lensRadius = -1) {
+  RenderSettings s;
+  s.algorithm = algorithm;
+  s.samplesPerPixel = spp;
+  s.seed = seed;
+  auto scene = loadScene(kScene, s);
+  if (lensRadius >= 0) {
+    SceneDescription d = scene->description();
+    d.camera.lensRadius = lensRadius;
+    scene = std::make_shared<Scene>(d);
+  }
+  RenderJob job(scene, s, "thin-lens");
+  return renderLocally(job).image;
+}
+
+TEST(ThinLens, PathTracingAndBidirectionalAgree) {
+  Image pt[2] = {render(Algorithm::PathTracing, 64, 1), render(Algorithm::PathTracing, 64, 2)};
+  Image bd[2] = {render(Algorithm::Bidirectional, 16, 3), render(Algorithm::Bidirectional, 16, 4)};
+  const size_t n = pt[0].rgb.size();
+  ASSERT_EQ(n, size_t(64 * 32 * 3));
+  // Over the image, the squared differences of the two estimators' averages are explained by
+  // their variance (each pixel's from its pair): the ratio of the sums is one for unbiased
+  // estimators. A biased one (a lens point missed, a density from the lens's centre) adds its
+  // squared bias.
+  double sum[2] = {0, 0}, var[2] = {0, 0}, squared = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double a = 0.5 * (pt[0].rgb[i] + pt[1].rgb[i]), b = 0.5 * (bd[0].rgb[i] + bd[1].rgb[i]);
+    var[0] += (pt[0].rgb[i] - pt[1].rgb[i]) * (pt[0].rgb[i] - pt[1].rgb[i]) / 4;
+    var[1] += (bd[0].rgb[i] - bd[1].rgb[i]) * (bd[0].rgb[i] - bd[1].rgb[i]) / 4;
+    sum[0] += a, sum[1] += b;
+    squared += (a - b) * (a - b);
+  }
+  const double se = std::sqrt(var[0] + var[1]) / double(n);
+  EXPECT_NEAR(sum[0] / double(n), sum[1] / double(n), 4 * se);
+  // The ratio's spread over 6000 pixels is a few percent; 1.3 leaves room for the variance
+  // estimates' own noise.
+  const double ratio = squared / (var[0] + var[1]);
+  EXPECT_LT(ratio, 1.3);
+  std::printf(
+      "thin lens: means pt %.4f bdpt %.4f (se %.4f), squared differences over variance "
+      "%.3f\n",
+      sum[0] / double(n), sum[1] / double(n), se, ratio);
+}
+
+// Light tracing alone against next-event estimation alone, each unweighted, on the paths of two
+// edges (light, surface, lens): the two estimate the same image, one through the lens point its
+// connection picked, the other through the camera ray's. With MIS the light-tracing strategy
+// has little weight in this scene, so the comparison above would not see it wrong.
+TEST(ThinLens, LightTracingThroughTheLensAgreesWithNextEventEstimation) {
+  RenderSettings settings;
+  auto scene = loadScene(kScene, settings);
+  const Camera& camera = scene->camera();
+  ASSERT_TRUE(camera.hasLens());
+  BidirectionalTracer tracer(*scene, 2);
+  const int w = camera.width(), h = camera.height();
+  const int64_t samples = int64_t(w) * h * 200;
+  // [strategy][render]: per pixel sums of the unweighted splats.
+  std::vector<double> image[2][2];
+  for (auto& strategy : image)
+    for (auto& r : strategy) r.assign(size_t(w) * h, 0.0);
+  for (int r = 0; r < 2; ++r) {
+    Rng rng(77 + r, 5);
+    IndependentSampler sampler(&rng);
+    for (int64_t i = 0; i < samples; ++i) {
+      tracer.visitStrategies(primarySampleFilmPoint(camera, sampler), sampler,
+                             [&](const BidirectionalTracer::StrategyPath& p) {
+                               if (p.s + p.t != 3 || p.s == 0) return;
+                               const int which = p.t == 1 ? 0 : 1;
+                               const int x = int(p.film.x), y = int(p.film.y);
+                               if (x < 0 || y < 0 || x >= w || y >= h) return;
+                               image[which][r][size_t(y) * w + x] += p.unweighted.x;
+                             });
+    }
+  }
+  double squared = 0, variance = 0, total[2] = {0, 0};
+  for (size_t j = 0; j < image[0][0].size(); ++j) {
+    double est[2], var[2];
+    for (int k = 0; k < 2; ++k) {
+      const double a = image[k][0][j] / double(samples), b = image[k][1][j] / double(samples);
+      est[k] = 0.5 * (a + b);
+      var[k] = (a - b) * (a - b) / 4;
+      total[k] += est[k];
+    }
+    squared += (est[0] - est[1]) * (est[0] - est[1]);
+    variance += var[0] + var[1];
+  }
+  const double ratio = squared / variance;
+  std::printf(
+      "thin lens, two-edge paths: light tracing %.4f, next-event %.4f (image sums), "
+      "squared differences over variance %.3f\n",
+      total[0], total[1], ratio);
+  EXPECT_GT(total[0], 0);
+  EXPECT_LT(ratio, 1.3);
+}
+
+TEST(ThinLens, PathSpaceChainsRefuseALens) {
+  // Their mutations keep the lens point their seed had: not ergodic, so not offered.
+  for (Algorithm a : {Algorithm::MLT, Algorithm::ERPT}) {
+    RenderSettings s;
+    s.algorithm = a;
+    try {
+      loadScene(kScene, s);
+      ADD_FAILURE() << algorithmName(a) << " accepted a thin lens";
+    } catch (const SceneLoadError& e) {
+      EXPECT_NE(std::string(e.what()).find("thin lens camera is not supported"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+// Mean product of the two renders' horizontal differences over columns [x0, x1).
+double sharpness(const Image& a, const Image& b, int x0, int x1) {
+  double sum = 0;
+  int count = 0;
+  for (int y = 2; y < a.height - 2; ++y) {
+    for (int x = x0; x + 1 < x1; ++x) {
+      sum += double(a.at(x + 1, y).x - a.at(x, y).x) * double(b.at(x + 1, y).x - b.at(x, y).x);
+      ++count;
+    }
+  }
+  return sum / count;
+}
+
+TEST(ThinLens, InFocusPlaneIsSharperThanTheFarOne) {
+  Image a = render(Algorithm::PathTracing, 32, 11), b = render(Algorithm::PathTracing, 32, 12);
+  const double near = sharpness(a, b, 2, 30), far = sharpness(a, b, 34, 62);
+  // Through a pinhole both boards look alike (the far one's squares are three times as large):
+  // the lens alone makes the difference.
+  Image pa = render(Algorithm::PathTracing, 32, 13, 0),
+        pb = render(Algorithm::PathTracing, 32, 14, 0);
+  const double pinholeNear = sharpness(pa, pb, 2, 30), pinholeFar = sharpness(pa, pb, 34, 62);
+  std::printf("sharpness: lens near %.4f far %.4f; pinhole near %.4f far %.4f\n", near, far,
+              pinholeNear, pinholeFar);
+  EXPECT_GT(near, 0.5 * pinholeNear);  // in focus: as sharp as through the pinhole, nearly
+  EXPECT_LT(far, 0.1 * pinholeFar);    // blurred over about 8 pixels
+  EXPECT_GT(pinholeFar, 0.5 * pinholeNear);
+}
+
+}  // namespace
+}  // namespace farm
