@@ -5,27 +5,34 @@
 # acceptance of each kind of proposal. Writes OUT/<scene>-<algorithm>/ (image, report) and
 # OUT/table.md.
 #   bench/equal_time.sh [SECONDS] [OUT] [ALGORITHMS] [SCENES]
+# A scene is NAME:WIDTH (../shared/scenes/NAME/scene.xml against ../shared/references/
+# NAME-WIDTH.exr) or NAME:WIDTH:SCENE_FILE:REFERENCE, e.g. the pbrt door scene against the long
+# BDPT render kept in the repository:
+#   bench/equal_time.sh 30 out/ajar "" \
+#     veach-ajar:256:../shared/scenes/veach-ajar/scene.pbrt:tests/data/veach-ajar-bdpt-256.exr
 # Run it alone: timings taken beside a build are noise.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
 out=${2:-out/equal-time}
 algorithms=${3:-"pt bdpt pssmlt pssmlt-pt mmlt mlt erpt"}
+[ -n "$algorithms" ] || algorithms="pt bdpt pssmlt pssmlt-pt mmlt mlt erpt"
 scenes=${4:-"cornell-box:256 veach-mis:320 veach-bidir:256 water-caustic:256"}
 shared=${FARM_SHARED_DIR:-../shared}
 mkdir -p "$out"
 for entry in $scenes; do
-  scene=${entry%%:*}
-  width=${entry##*:}
+  IFS=: read -r scene width sceneFile reference <<< "$entry"
+  sceneFile=${sceneFile:-$shared/scenes/$scene/scene.xml}
+  reference=${reference:-$shared/references/$scene-$width.exr}
   for algorithm in $algorithms; do
     dir="$out/$scene-$algorithm"
     mkdir -p "$dir"
-    build/bin/farm render "$shared/scenes/$scene/scene.xml" --width "$width" \
+    build/bin/farm render "$sceneFile" --width "$width" \
       --algorithm "$algorithm" --time "$seconds" --seed 1 --threads 2 \
-      --reference "$shared/references/$scene-$width.exr" --report "$dir" -o "$dir/image.exr" \
+      --reference "$reference" --report "$dir" -o "$dir/image.exr" \
       > "$dir/log.txt" 2>&1
-    /usr/bin/python3 "$shared/tools/imgcmp.py" "$dir/image.exr" \
-      "$shared/references/$scene-$width.exr" > "$dir/imgcmp.txt" 2>&1 || true
+    /usr/bin/python3 "$shared/tools/imgcmp.py" "$dir/image.exr" "$reference" \
+      > "$dir/imgcmp.txt" 2>&1 || true
   done
 done
 /usr/bin/python3 - "$out" "$algorithms" "$scenes" <<'EOF'
