@@ -211,8 +211,31 @@ bool Bsdf::isBlack() const {
     case BsdfDescription::Type::Dielectric:
     case BsdfDescription::Type::RoughDielectric:
       return false;
+    case BsdfDescription::Type::Plastic:
+      return farm::isBlack(desc_.reflectance) && farm::isBlack(desc_.specularReflectance);
   }
   return false;
+}
+
+// pbrt-v3's plastic is the sum of a Lambertian lobe and a Torrance-Sparrow lobe whose Fresnel
+// term is a dielectric's: nothing couples them (Kd + Ks <= 1 keeps it energy-conserving).
+// Both lobes are sampled, each in proportion to its reflectance's luminance; the density is
+// the mixture's (the one-sample model of Veach 1997, 9.2.4), so eval cos / pdf is the weight.
+float Bsdf::plasticDiffuseProbability() const {
+  const float d = luminance(desc_.reflectance), g = luminance(desc_.specularReflectance);
+  return d + g > 0 ? d / (d + g) : 0.5f;
+}
+
+Spectrum Bsdf::plasticGlossy(const Vec3f& wo, const Vec3f& wi) const {
+  Vec3f h;
+  if (wo.z <= 0 || wi.z <= 0 || !reflectionHalfVector(wo, wi, &h)) return Spectrum(0.0f);
+  const float d = microfacetD(desc_.distribution, desc_.alpha, h);
+  if (d == 0) return Spectrum(0.0f);
+  const float g = smithG1(desc_.distribution, desc_.alpha, wo, h) *
+                  smithG1(desc_.distribution, desc_.alpha, wi, h);
+  float cosT;
+  const float f = fresnelDielectric(dot(wo, h), desc_.intIOR / desc_.extIOR, &cosT);
+  return desc_.specularReflectance * (f * d * g / (4 * wo.z * wi.z));
 }
 
 bool Bsdf::isDelta() const {
@@ -345,6 +368,9 @@ Spectrum Bsdf::eval(const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) co
     }
     case BsdfDescription::Type::RoughDielectric:
       return roughDielectricEval(wo, wi, mode);
+    case BsdfDescription::Type::Plastic:
+      if (wo.z <= 0 || wi.z <= 0) return Spectrum(0.0f);
+      return desc_.reflectance * kInvPi + plasticGlossy(wo, wi);
     case BsdfDescription::Type::Dielectric:
     case BsdfDescription::Type::Conductor:
       return Spectrum(0.0f);
@@ -370,6 +396,15 @@ float Bsdf::pdf(const Vec3f& woIn, const Vec3f& wiIn) const {
     }
     case BsdfDescription::Type::RoughDielectric:
       return roughDielectricPdf(wo, wi);
+    case BsdfDescription::Type::Plastic: {
+      if (wo.z <= 0 || wi.z <= 0) return 0;
+      const float pd = plasticDiffuseProbability();
+      float pdf = pd * cosineHemispherePdf(wi.z);
+      Vec3f h;
+      if (reflectionHalfVector(wo, wi, &h))
+        pdf += (1 - pd) * facetPdf(desc_.distribution, desc_.alpha, wo, h) / (4 * absDot(wo, h));
+      return pdf;
+    }
     case BsdfDescription::Type::Dielectric:
     case BsdfDescription::Type::Conductor:
       return 0;
@@ -421,6 +456,25 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
     }
     case BsdfDescription::Type::RoughDielectric:
       return roughDielectricSample(wo, u, mode, out);
+    case BsdfDescription::Type::Plastic: {
+      if (wo.z <= 0) return false;
+      Vec3f wi;
+      if (u[0] < plasticDiffuseProbability()) {
+        wi = squareToCosineHemisphere({u[1], u[2]});
+      } else {
+        const Vec3f m = sampleFacet(desc_.distribution, desc_.alpha, wo, u[1], u[2]);
+        if (dot(wo, m) <= 0) return false;
+        wi = reflect(wo, m);
+      }
+      if (wi.z <= 0) return false;
+      const float pdf = this->pdf(wo, wi);
+      if (!(pdf > 0)) return false;
+      out->wi = flipped ? Vec3f(wi.x, wi.y, -wi.z) : wi;
+      out->pdf = pdf;
+      out->weight = eval(wo, wi, mode) * (wi.z / pdf);
+      out->delta = false;
+      return isValidRadiance(out->weight);
+    }
     case BsdfDescription::Type::Dielectric: {
       float eta = desc_.intIOR / desc_.extIOR;
       float cosI = wo.z, cosT;

@@ -59,6 +59,10 @@ class Bsdf {
   float roughDielectricPdf(const Vec3f& wo, const Vec3f& wi) const;
   bool roughDielectricSample(const Vec3f& wo, const float u[3], TransportMode mode,
                              BsdfSample* out) const;
+  // Plastic: the probability of sampling the diffuse lobe (by the lobes' luminance), and the
+  // glossy lobe's value.
+  float plasticDiffuseProbability() const;
+  Spectrum plasticGlossy(const Vec3f& wo, const Vec3f& wi) const;
 
   BsdfDescription desc_;
   BsdfDescription::Type type_;

@@ -33,8 +33,9 @@ enum class MicrofacetDistribution { Beckmann, GGX };
 
 struct BsdfDescription {
   // Mitsuba 0.6's diffuse, dielectric (smooth), conductor (smooth), roughconductor and
-  // roughdielectric.
-  enum class Type { Diffuse, Dielectric, Conductor, RoughConductor, RoughDielectric };
+  // roughdielectric; pbrt's plastic: a diffuse lobe (reflectance) plus a microfacet reflection
+  // lobe (specularReflectance, alpha) with the Fresnel term of a dielectric of index intIOR.
+  enum class Type { Diffuse, Dielectric, Conductor, RoughConductor, RoughDielectric, Plastic };
   Type type = Type::Diffuse;
   std::string id;         // the XML id, or empty
   bool twoSided = false;  // wrapped in Mitsuba's "twosided"
@@ -44,7 +45,7 @@ struct BsdfDescription {
   int reflectanceTexture = -1;
   // dielectric and roughdielectric: interior and exterior indices of refraction
   float intIOR = 1.5046f, extIOR = 1.000277f;
-  // roughconductor and roughdielectric
+  // roughconductor, roughdielectric and plastic
   MicrofacetDistribution distribution = MicrofacetDistribution::Beckmann;
   float alpha = 0.1f;
   // conductor and roughconductor

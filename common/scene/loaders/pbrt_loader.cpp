@@ -990,11 +990,33 @@ class PbrtLoader {
       }
     } else if (type == "" || type == "none" || type == "interface") {
       fail(d, "material '" + type + "' (a boundary of media only) is not supported");
-    } else if (type == "plastic" || type == "coateddiffuse") {
+    } else if (type == "plastic") {
+      // pbrt-v3's plastic: Lambertian Kd plus a Trowbridge-Reitz lobe Ks with a dielectric's
+      // Fresnel term. pbrt-v3 takes that term from inside the coating (index 1.5 to 1, total
+      // reflection beyond 42 degrees); the farm takes the physical one, from the air.
+      b.type = BsdfDescription::Type::Plastic;
+      b.twoSided = true;
+      b.reflectance = Spectrum(0.25f);
+      int texture = -1;
+      getSpectrum(d, "Kd", &b.reflectance, &texture);
+      b.reflectanceTexture = texture;
+      b.specularReflectance = Spectrum(0.25f);
+      getSpectrum(d, "Ks", &b.specularReflectance);
+      double alpha = roughness(d, false, 0.1, true);
+      if (!(alpha > 0)) fail(d, "plastic of roughness 0 (without remapping) is not supported");
+      b.alpha = float(alpha);
+      b.distribution = MicrofacetDistribution::GGX;
+      b.intIOR = 1.5f;
+      b.extIOR = 1.0f;
+      warn(d,
+           "plastic: its glossy lobe's Fresnel term is a dielectric's seen from the air (pbrt-v3 "
+           "computes it from inside the coating, which reflects totally beyond 42 degrees)");
+    } else if (type == "coateddiffuse") {
       fail(d, what + " is not supported yet");
     } else {
-      fail(d,
-           what + " is not supported (matte/diffuse, metal/conductor, mirror, glass/dielectric)");
+      fail(d, what +
+                  " is not supported (matte/diffuse, metal/conductor, mirror, glass/dielectric, "
+                  "plastic)");
     }
     getString(d, "type", "");  // MakeNamedMaterial's, read already
     rejectUnused(d, what);

@@ -254,9 +254,12 @@ TEST(PbrtLoader, MaterialsOfBothVersions) {
       "NamedMaterial \"red\"\n" +
       kTriangle +
       // v3 metal of roughness 0: remapped from its clamp 1e-3, so still rough (alpha 0.047)
-      "Material \"metal\" \"float roughness\" 0\n" + kTriangle;
+      "Material \"metal\" \"float roughness\" 0\n" + kTriangle +
+      "Material \"plastic\" \"rgb Kd\" [0.5 0.4 0.3] \"rgb Ks\" [0.2 0.2 0.2] "
+      "\"float roughness\" 0.01 \"bool remaproughness\" false\n" +
+      kTriangle;
   SceneDescription s = loadPbrtScene(dir.write("s.pbrt", scene(world)));
-  ASSERT_EQ(s.shapes.size(), 10u);
+  ASSERT_EQ(s.shapes.size(), 11u);
   auto bsdf = [&](int shape) { return s.bsdfs[size_t(s.shapes[size_t(shape)].bsdf)]; };
   EXPECT_EQ(bsdf(0).type, BsdfDescription::Type::Diffuse);
   EXPECT_TRUE(bsdf(0).twoSided);
@@ -284,6 +287,11 @@ TEST(PbrtLoader, MaterialsOfBothVersions) {
   expectNear(bsdf(8).reflectance, {0.9f, 0, 0}, 0);
   EXPECT_EQ(bsdf(9).type, BsdfDescription::Type::RoughConductor);
   EXPECT_NEAR(bsdf(9).alpha, 0.04718, 1e-4);
+  EXPECT_EQ(bsdf(10).type, BsdfDescription::Type::Plastic);
+  expectNear(bsdf(10).reflectance, {0.5f, 0.4f, 0.3f}, 0);
+  expectNear(bsdf(10).specularReflectance, Spectrum(0.2f), 0);
+  EXPECT_FLOAT_EQ(bsdf(10).alpha, 0.01f);
+  EXPECT_FLOAT_EQ(bsdf(10).intIOR, 1.5f);
 }
 
 TEST(PbrtLoader, ImageTexturesAndTheirEncodings) {
@@ -356,7 +364,9 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
       {"LightSource \"point\" \"rgb I\" [1 1 1]\n", 5, "light source 'point' is not supported"},
       {"\n\nShape \"curve\" \"point P\" [0 0 0 1 1 1 2 2 2 3 3 3]\n", 7,
        "shape 'curve' is not supported"},
-      {"Material \"plastic\"\n", 5, "material 'plastic' is not supported"},
+      {"Material \"coateddiffuse\"\n", 5, "material 'coateddiffuse' is not supported"},
+      {"Material \"plastic\" \"float roughness\" 0 \"bool remaproughness\" false\n", 5,
+       "plastic of roughness 0"},
       {"Material \"uber\"\n", 5, "material 'uber' is not supported"},
       {"Material \"matte\" \"float sigma\" 20\n", 5, "Oren-Nayar"},
       {"Material \"matte\" \"rgb Kd\" [0.5 0.5]\n", 5, "takes 3 numbers"},
