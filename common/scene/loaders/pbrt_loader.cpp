@@ -121,6 +121,7 @@ constexpr int kMaxTextureDepth = 16;             // nesting of checkerboard and 
 constexpr size_t kMaxTextures = 100000;          // entries in SceneDescription::textures
 constexpr int kMaxIncludedFiles = 1000;          // Include and Import directives in all
 constexpr long long kMaxTexelBytes = 4ll << 30;  // decoded texture storage of a scene
+constexpr size_t kMaxGeometryElements = size_t(1) << 28;  // vertices + triangle corners
 
 class PbrtLoader {
  public:
@@ -1230,6 +1231,11 @@ class PbrtLoader {
     } else {
       fail(d, what + " is not supported (trianglemesh, plymesh, sphere, disk, bilinearmesh)");
     }
+    // A scene-wide budget: a small file can name a large PLY many times, or many disks.
+    geometryElements_ += shape.positions.size() + shape.indices.size();
+    if (geometryElements_ > kMaxGeometryElements)
+      fail(d, "the scene's meshes exceed " + std::to_string(kMaxGeometryElements) +
+                  " vertices and triangle corners in all");
     scene_.shapes.push_back(std::move(shape));
   }
 
@@ -1271,6 +1277,7 @@ class PbrtLoader {
   std::map<std::string, std::shared_ptr<TextureImage>> images_;
   std::vector<int> textureDepth_;  // per texture: 1 + its deepest child's
   long long texelBytes_ = 0;
+  size_t geometryElements_ = 0;
   int includedFiles_ = 0;
   std::vector<std::string> includeStack_;
   bool sawFilter_ = false, sawV4_ = false;
