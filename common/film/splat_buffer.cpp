@@ -5,7 +5,63 @@
 
 namespace farm {
 
-SplatBuffer::SplatBuffer(int width, int height, FilterType filter)
+namespace {
+
+constexpr int kMaxGaussianReach = 34;  // pixel centres per axis: radius up to 16
+
+float gaussian1d(const PixelFilter& f, float d) {
+  return std::max(0.0f, std::exp(-f.alpha * d * d) - std::exp(-f.alpha * f.radius * f.radius));
+}
+
+// The pixel centres i + 0.5 within the gaussian's reach of x, from *first on, with their
+// weights normalized by their sum; their count (0 when none).
+int gaussianWeights(const PixelFilter& f, float x, int* first, float* weights) {
+  const int lo = int(std::ceil(x - 0.5f - f.radius)), hi = int(std::floor(x - 0.5f + f.radius));
+  int count = 0;
+  float sum = 0;
+  for (int i = lo; i <= hi && count < kMaxGaussianReach; ++i, ++count) {
+    weights[count] = gaussian1d(f, x - (float(i) + 0.5f));
+    sum += weights[count];
+  }
+  *first = lo;
+  if (!(sum > 0)) return 0;
+  for (int k = 0; k < count; ++k) weights[k] /= sum;
+  return count;
+}
+
+}  // namespace
+
+double pixelFilterMassInside(const PixelFilter& filter, int i, int n) {
+  switch (filter.type) {
+    case FilterType::Box:
+      return 1;
+    case FilterType::Tent: {
+      double mass = 1;
+      if (i == 0) mass -= 0.125;  // integral of the tent from 0.5 to 1 from the centre
+      if (i == n - 1) mass -= 0.125;
+      return mass;
+    }
+    case FilterType::Gaussian: {
+      const double c = i + 0.5, r = filter.radius;
+      if (c - r >= 0 && c + r <= n) return 1;
+      // The integral of h_i over the film's [0, n), by the midpoint rule at 256 steps a pixel.
+      const double a = std::max(0.0, c - r), b = std::min(double(n), c + r);
+      const int steps = std::max(1, int(std::ceil((b - a) * 256)));
+      const double dx = (b - a) / steps;
+      double mass = 0;
+      float w[kMaxGaussianReach];
+      for (int k = 0; k < steps; ++k) {
+        int first;
+        const int count = gaussianWeights(filter, float(a + (k + 0.5) * dx), &first, w);
+        if (i - first >= 0 && i - first < count) mass += w[i - first] * dx;
+      }
+      return mass;
+    }
+  }
+  return 1;
+}
+
+SplatBuffer::SplatBuffer(int width, int height, const PixelFilter& filter)
     : width_(width), height_(height), filter_(filter), data_(size_t(width) * height * 3, 0.0f) {}
 
 void SplatBuffer::clear() {
@@ -19,8 +75,17 @@ void SplatBuffer::add(const Vec2f& film, const Spectrum& v, float scale) {
     float s = w * scale;
     p[0] += v.x * s, p[1] += v.y * s, p[2] += v.z * s;
   };
-  if (filter_ == FilterType::Box) {
+  if (filter_.type == FilterType::Box) {
     put(int(std::floor(film.x)), int(std::floor(film.y)), 1.0f);
+    return;
+  }
+  if (filter_.type == FilterType::Gaussian) {
+    float wx[kMaxGaussianReach], wy[kMaxGaussianReach];
+    int x0, y0;
+    const int nx = gaussianWeights(filter_, film.x, &x0, wx);
+    const int ny = gaussianWeights(filter_, film.y, &y0, wy);
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) put(x0 + i, y0 + j, wx[i] * wy[j]);
     return;
   }
   // Tent of radius one pixel around each pixel centre (x + 0.5): separable, its weights over

@@ -1,7 +1,10 @@
 #pragma once
 // A film that receives splats at continuous film positions and spreads each over the pixels of
 // the reconstruction filter. Filters are normalized (their weights over all pixels add up to
-// one), so a splat's total value is kept: what MLT's normalization by Z relies on.
+// one), so a splat's total value is kept: what MLT's normalization by Z relies on. The gaussian
+// is normalized per splat, by the sum of its weights over every pixel centre in reach (those off
+// the film included): pixel j then sees h_j(x) = g(x - c_j) / sum_k g(x - c_k), which
+// integrates to one over the plane, the sum being periodic in x with a period of one pixel.
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -40,9 +43,23 @@ struct InvalidSplats {
   }
 };
 
+// The reconstruction filter of a camera.
+struct PixelFilter {
+  FilterType type = FilterType::Tent;
+  float radius = 2, alpha = 2;  // Gaussian
+  static PixelFilter of(const CameraDescription& camera) {
+    return {camera.filter, camera.filterRadius, camera.filterAlpha};
+  }
+};
+
+// The share of pixel i's filter (along one axis) that lies on a film of n pixels: one but within
+// the filter's reach of the edges. Dividing by it makes border pixels the filter-weighted
+// average renderers report (no dark rim).
+double pixelFilterMassInside(const PixelFilter& filter, int i, int n);
+
 class SplatBuffer {
  public:
-  SplatBuffer(int width, int height, FilterType filter);
+  SplatBuffer(int width, int height, const PixelFilter& filter);
 
   void add(const Vec2f& film, const Spectrum& value, float scale = 1.0f);
   void clear();
@@ -53,7 +70,7 @@ class SplatBuffer {
 
  private:
   int width_, height_;
-  FilterType filter_;
+  PixelFilter filter_;
   std::vector<float> data_;  // 3 floats per pixel
 };
 

@@ -270,28 +270,20 @@ void RenderJob::runChain(const ChainSpec& spec, const std::function<bool(ChainFl
     runSampleChain(*scene_, spec, onFlush, cancel);
 }
 
-namespace {
-// Share of a pixel's tent filter (radius one pixel, centred at i + 0.5) that lies on a film of n
-// pixels: one, but for the outermost pixels, whose filter reaches half a pixel past the edge.
-double tentMassInside(int i, int n) {
-  double mass = 1;
-  if (i == 0) mass -= 0.125;  // integral of the tent from 0.5 to 1 from the centre
-  if (i == n - 1) mass -= 0.125;
-  return mass;
-}
-}  // namespace
-
 Image RenderJob::resolve(const std::vector<double>& sums, double scale) const {
   // Every estimator splats into pixel j with its filter h_j, so pixel j's expectation is the
   // integral of h_j L over the film. Dividing by the filter's mass on the film makes border
   // pixels the filter-weighted average that renderers report (no dark rim).
   Image image(width(), height());
   if (sums.size() < image.rgb.size()) return image;
-  const bool tent = scene_->description().camera.filter == FilterType::Tent;
+  const PixelFilter filter = PixelFilter::of(scene_->description().camera);
+  std::vector<double> massX(size_t(image.width));
+  for (int x = 0; x < image.width; ++x)
+    massX[size_t(x)] = pixelFilterMassInside(filter, x, image.width);
   for (int y = 0; y < image.height; ++y) {
-    double wy = tent ? tentMassInside(y, image.height) : 1.0;
+    const double wy = pixelFilterMassInside(filter, y, image.height);
     for (int x = 0; x < image.width; ++x) {
-      double w = wy * (tent ? tentMassInside(x, image.width) : 1.0);
+      double w = wy * massX[size_t(x)];
       size_t i = (size_t(y) * image.width + x) * 3;
       for (int c = 0; c < 3; ++c) image.rgb[i + c] = float(sums[i + c] * scale / w);
     }

@@ -13,7 +13,9 @@
 namespace farm {
 
 enum class FovAxis { X, Y, Smaller, Larger, Diagonal };
-enum class FilterType { Box, Tent };
+// Box: one pixel; Tent: radius one pixel; Gaussian: exp(-alpha d^2) - exp(-alpha r^2) per axis
+// within radius r (pbrt's and Mitsuba's truncated gaussian).
+enum class FilterType { Box, Tent, Gaussian };
 
 struct CameraDescription {
   // Camera-to-world. Camera space as Mitsuba's perspective sensor: looks down +z, +y up,
@@ -23,6 +25,7 @@ struct CameraDescription {
   FovAxis fovAxis = FovAxis::X;
   int width = 768, height = 576;  // film size in pixels
   FilterType filter = FilterType::Tent;
+  float filterRadius = 2, filterAlpha = 2;  // Gaussian only, in pixels
   // Thin lens (Mitsuba's thinlens, pbrt's lensradius): a lens disk of this radius, focused at
   // this distance along the view direction; 0: a pinhole.
   float lensRadius = 0;

@@ -679,9 +679,25 @@ class MitsubaLoader {
         cam.filter = FilterType::Tent;
       } else if (type == "box") {
         cam.filter = FilterType::Box;
+      } else if (type == "gaussian") {
+        // Mitsuba's gaussian: exp(-x^2 / (2 stddev^2)), less its value at 4 standard deviations,
+        // where it is cut off.
+        std::vector<pugi::xml_node> filterNested;
+        PropertySet filterProps = collectProperties(child, &filterNested);
+        for (const pugi::xml_node& n : filterNested) failUnknownElement(n);
+        double stddev = 0.5;
+        if (pugi::xml_node n = filterProps.take("stddev")) {
+          requireTag(n, {"float", "integer"});
+          stddev = number(n, requireValue(n), "parameter 'stddev'");
+          if (!(stddev > 0 && stddev <= 4)) fail(n, "stddev must be in (0, 4] pixels");
+        }
+        rejectUnused(filterProps, "rfilter type 'gaussian'");
+        cam.filter = FilterType::Gaussian;
+        cam.filterRadius = float(4 * stddev);
+        cam.filterAlpha = float(1 / (2 * stddev * stddev));
       } else {
         fail(child, "unknown or unsupported reconstruction filter type '" + type +
-                        "' (supported: tent, box)");
+                        "' (supported: tent, box, gaussian)");
       }
     }
   }

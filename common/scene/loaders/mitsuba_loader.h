@@ -2,11 +2,12 @@
 // Mitsuba 0.6 XML scenes (the subset the farm renders) to a SceneDescription in world space.
 //
 // Supported: <integrator> (maxDepth only), one perspective or thinlens <sensor> with <film> and
-// <rfilter> (tent, box), <bsdf> diffuse / twosided / dielectric / roughconductor (declared at top
-// level with an id and used through <ref>, or inline in a shape), <shape> rectangle / cube / sphere
-// / obj with an optional area <emitter>, and <transform> built from matrix, translate, scale,
-// rotate, lookat. Anything else that would change the picture is an error rather than silently
-// ignored: a render that quietly differs from the scene is worse than one that refuses to start.
+// <rfilter> (tent, box, gaussian), <bsdf> diffuse / twosided / dielectric / roughconductor
+// (declared at top level with an id and used through <ref>, or inline in a shape), <shape>
+// rectangle / cube / sphere / obj with an optional area <emitter>, and <transform> built from
+// matrix, translate, scale, rotate, lookat. Anything else that would change the picture is an error
+// rather than silently ignored: a render that quietly differs from the scene is worse than one that
+// refuses to start.
 #include <string>
 
 #include "common/scene/loaders/scene_files.h"

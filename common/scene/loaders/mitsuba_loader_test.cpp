@@ -636,10 +636,10 @@ TEST(MitsubaLoaderErrorTest, UnknownTypesNameTypeAndLine) {
 
   msg = loadError(dir.write(
       "e.xml",
-      sceneXml("<sensor type=\"perspective\"><film type=\"hdrfilm\">\n<rfilter type=\"gaussian\"/>"
+      sceneXml("<sensor type=\"perspective\"><film type=\"hdrfilm\">\n<rfilter type=\"mitchell\"/>"
                "</film></sensor>\n")));
   EXPECT_NE(msg.find("e.xml:4:"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("gaussian"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("mitchell"), std::string::npos) << msg;
 
   msg = loadError(dir.write("f.xml", sceneXml("<shape type=\"cube\">\n<texture type=\"bitmap\"/>"
                                               "</shape>\n")));

@@ -464,7 +464,9 @@ TEST(PbrtLoader, HeaderErrors) {
       {"Camera \"orthographic\"\n", 4, "camera 'orthographic' is not supported"},
       {"Camera \"perspective\" \"float lensradius\" -0.1\n", 4, "lensradius must be >= 0"},
       {"Camera \"perspective\" \"float focaldistance\" 0\n", 4, "focaldistance must be > 0"},
-      {"PixelFilter \"gaussian\"\n", 4, "pixel filter 'gaussian' is not supported"},
+      {"PixelFilter \"mitchell\"\n", 4, "pixel filter 'mitchell' is not supported"},
+      {"PixelFilter \"gaussian\" \"float xwidth\" 2 \"float ywidth\" 1\n", 4,
+       "different x and y radii"},
       {"PixelFilter \"triangle\"\n", 4, "radius 1 only"},  // v3's default radius is 2
       {"Film \"image\" \"float cropwindow\" [0 0.5 0 0.5]\n", 4, "cropwindow"},
       {"Film \"image\" \"integer xresolution\" 0\n", 4, "outside 1..65536"},
@@ -514,6 +516,26 @@ TEST(PbrtLoader, HostileInputIsRefusedCheaply) {
                                                    std::string(kTriangle)))
                 .find("non-uniform scale"),
             std::string::npos);
+}
+
+TEST(PbrtLoader, GaussianFilters) {
+  TempDir dir;
+  auto filterOf = [&](const std::string& header, const std::string& world = kTriangle) {
+    return loadPbrtScene(dir.write("s.pbrt", scene(world, header))).camera;
+  };
+  CameraDescription v3 = filterOf("PixelFilter \"gaussian\"\n");  // v3: radius 2, alpha 2
+  EXPECT_EQ(v3.filter, FilterType::Gaussian);
+  EXPECT_FLOAT_EQ(v3.filterRadius, 2);
+  EXPECT_FLOAT_EQ(v3.filterAlpha, 2);
+  CameraDescription v4 = filterOf("PixelFilter \"gaussian\" \"float sigma\" 0.25\n");
+  EXPECT_FLOAT_EQ(v4.filterRadius, 1.5f);  // v4's default radius
+  EXPECT_FLOAT_EQ(v4.filterAlpha, 8);      // 1 / (2 sigma^2)
+  // No PixelFilter: v3's box, unless the file is v4 (its default is a gaussian).
+  EXPECT_EQ(filterOf("").filter, FilterType::Box);
+  CameraDescription implicit = filterOf("", "Material \"diffuse\"\n" + std::string(kTriangle));
+  EXPECT_EQ(implicit.filter, FilterType::Gaussian);
+  EXPECT_FLOAT_EQ(implicit.filterRadius, 1.5f);
+  EXPECT_FLOAT_EQ(implicit.filterAlpha, 2);
 }
 
 TEST(PbrtLoader, WarningsSayWhatWasIgnored) {
