@@ -487,8 +487,23 @@ class PbrtLoader {
                   "' is not supported yet (area lights only: AreaLightSource \"diffuse\")");
     } else if (n == "MakeNamedMedium" || n == "MediumInterface") {
       fail(d, n + ": participating media are not supported");
-    } else if (n == "ObjectBegin" || n == "ObjectEnd" || n == "ObjectInstance") {
-      fail(d, n + ": object instancing is not supported");
+    } else if (n == "ObjectBegin") {
+      inWorld(d);
+      if (inObject_) fail(d, "ObjectBegin inside the definition of object '" + objectName_ + "'");
+      if (objects_.count(d.strings[0])) fail(d, "object '" + d.strings[0] + "' is defined twice");
+      // As pbrt: an attribute block around the definition.
+      attributeStack_.push_back(attrs_);
+      inObject_ = true;
+      objectName_ = d.strings[0];
+      objects_[objectName_];
+    } else if (n == "ObjectEnd") {
+      if (!inObject_) fail(d, "ObjectEnd without ObjectBegin");
+      inObject_ = false;
+      attrs_ = attributeStack_.back();
+      attributeStack_.pop_back();
+    } else if (n == "ObjectInstance") {
+      inWorld(d);
+      instantiate(d);
     } else if (n == "Attribute") {
       fail(d, "Attribute (default parameters) is not supported");
     } else {
@@ -1252,7 +1267,50 @@ class PbrtLoader {
     if (geometryElements_ > kMaxGeometryElements)
       fail(d, "the scene's meshes exceed " + std::to_string(kMaxGeometryElements) +
                   " vertices and triangle corners in all");
+    if (inObject_) {
+      // Instanced shapes take no area light (pbrt refuses them too: one light per instance
+      // would need the instance's transform in its sampling).
+      if (shape.isEmitter) fail(d, "an area light inside an object definition is not supported");
+      objects_[objectName_].push_back(std::move(shape));
+      return;
+    }
     scene_.shapes.push_back(std::move(shape));
+  }
+
+  // ObjectInstance: the object's shapes (in the space their definition's transformation made)
+  // copied through the current transformation, as pbrt's instance-to-world applies it to them.
+  void instantiate(Directive& d) {
+    if (inObject_) fail(d, "ObjectInstance inside the definition of object '" + objectName_ + "'");
+    auto it = objects_.find(d.strings[0]);
+    if (it == objects_.end()) fail(d, "object '" + d.strings[0] + "' is not defined");
+    const Matrix4& m = attrs_.ctm;
+    const Matrix4 normalMatrix = m.inverse().transpose();
+    const bool mirrors = determinant3(m) < 0;
+    for (const ShapeDescription& original : it->second) {
+      ShapeDescription shape = original;
+      shape.origin +=
+          " instanced at " + fs::path(d.file).filename().string() + ":" + std::to_string(d.line);
+      if (shape.type == ShapeDescription::Type::Sphere) {
+        shape.center = m.applyPoint(shape.center);
+        shape.radius = float(shape.radius * similarityScale(d, m));
+        // A mirror turns the sphere inside out in pbrt's orientation rule.
+        if (mirrors) shape.flipNormals = !shape.flipNormals;
+      } else {
+        for (Vec3f& p : shape.positions) p = m.applyPoint(p);
+        for (Vec3f& n : shape.normals) n = normalize(normalMatrix.applyVector(n));
+        // Without normals the winding tells the outside: a mirror would turn it round.
+        if (mirrors)
+          for (size_t t = 0; t < shape.indices.size(); t += 3)
+            std::swap(shape.indices[t + 1], shape.indices[t + 2]);
+        for (const Vec3f& p : shape.positions)
+          if (!isFinite(p)) fail(d, "the instance's transformation makes a position non-finite");
+      }
+      geometryElements_ += shape.positions.size() + shape.indices.size();
+      if (geometryElements_ > kMaxGeometryElements)
+        fail(d, "the scene's meshes exceed " + std::to_string(kMaxGeometryElements) +
+                    " vertices and triangle corners in all");
+      scene_.shapes.push_back(std::move(shape));
+    }
   }
 
   // pbrt-v3 turns a mesh with normals round under ReverseOrientation (or a mirror), v4 does not:
@@ -1284,6 +1342,8 @@ class PbrtLoader {
   fs::path dir_;
   SceneDescription scene_;
   bool sawWorld_ = false, sawCamera_ = false, inObject_ = false;
+  std::string objectName_;
+  std::map<std::string, std::vector<ShapeDescription>> objects_;
   Attributes attrs_;
   std::vector<Attributes> attributeStack_;
   std::vector<Matrix4> transformStack_;

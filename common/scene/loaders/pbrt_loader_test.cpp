@@ -408,7 +408,11 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
       {"AreaLightSource \"diffuse\" \"bool twosided\" true\n", 5, "two-sided area lights"},
       {"AreaLightSource \"diffuse\" \"blackbody L\" [6500]\n", 5, "blackbody"},
       {"MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n", 5, "participating media"},
-      {"ObjectBegin \"o\"\n", 5, "object instancing"},
+      {"ObjectInstance \"o\"\n", 5, "object 'o' is not defined"},
+      {"ObjectEnd\n", 5, "ObjectEnd without ObjectBegin"},
+      {"ObjectBegin \"o\"\nObjectBegin \"p\"\n", 6, "ObjectBegin inside the definition"},
+      {"ObjectBegin \"o\"\nAreaLightSource \"diffuse\"\n" + std::string(kTriangle), 7,
+       "area light inside an object definition"},
       {"AttributeEnd\n", 5, "AttributeEnd without AttributeBegin"},
       {"TransformEnd\n", 5, "TransformEnd without TransformBegin"},
       {"Rotate 30 0 0 0\n", 5, "zero axis"},
@@ -516,6 +520,31 @@ TEST(PbrtLoader, HostileInputIsRefusedCheaply) {
                                                    std::string(kTriangle)))
                 .find("non-uniform scale"),
             std::string::npos);
+}
+
+// Instances are flattened: each ObjectInstance copies the object's shapes (as their definition's
+// transformation placed them) through the transformation current at the instance.
+TEST(PbrtLoader, ObjectInstancesAreFlattened) {
+  TempDir dir;
+  std::string world =
+      "ObjectBegin \"tri\"\nTranslate 0 0 1\nMaterial \"matte\" \"rgb Kd\" [0.2 0.3 0.4]\n" +
+      std::string(kTriangle) +
+      "ObjectEnd\n"
+      "Translate 10 0 0\nObjectInstance \"tri\"\n"
+      "Scale -1 1 1\nObjectInstance \"tri\"\n";
+  SceneDescription s = loadPbrtScene(dir.write("s.pbrt", scene(world)));
+  ASSERT_EQ(s.shapes.size(), 2u);
+  expectNear(s.shapes[0].positions[1], {11, 0, 1}, 1e-6f);
+  expectNear(s.shapes[1].positions[1], {9, 0, 1}, 1e-6f);
+  for (const ShapeDescription& sh : s.shapes) {
+    // The material of the definition; the normal +z in both (the mirror in x leaves it).
+    expectNear(s.bsdfs[size_t(sh.bsdf)].reflectance, {0.2f, 0.3f, 0.4f}, 0);
+    Vec3f n = cross(sh.positions[sh.indices[1]] - sh.positions[sh.indices[0]],
+                    sh.positions[sh.indices[2]] - sh.positions[sh.indices[0]]);
+    EXPECT_GT(n.z, 0) << sh.origin;
+  }
+  // The ObjectEnd ended the definition's attribute block: the Translate 0 0 1 stayed inside.
+  EXPECT_NE(s.shapes[1].origin.find("instanced at s.pbrt:"), std::string::npos);
 }
 
 TEST(PbrtLoader, GaussianFilters) {
