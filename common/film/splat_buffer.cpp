@@ -9,8 +9,10 @@ namespace {
 
 constexpr int kMaxGaussianReach = 34;  // pixel centres per axis: radius up to 16
 
-float gaussian1d(const PixelFilter& f, float d) {
-  return std::max(0.0f, std::exp(-f.alpha * d * d) - std::exp(-f.alpha * f.radius * f.radius));
+// In double: for small alpha the two exponentials are close to one and to each other.
+double gaussian1d(const PixelFilter& f, double d) {
+  const double alpha = f.alpha, r = f.radius;
+  return std::max(0.0, std::exp(-alpha * d * d) - std::exp(-alpha * r * r));
 }
 
 // The pixel centres i + 0.5 within the gaussian's reach of x, from *first on, with their
@@ -18,14 +20,21 @@ float gaussian1d(const PixelFilter& f, float d) {
 int gaussianWeights(const PixelFilter& f, float x, int* first, float* weights) {
   const int lo = int(std::ceil(x - 0.5f - f.radius)), hi = int(std::floor(x - 0.5f + f.radius));
   int count = 0;
-  float sum = 0;
+  double w[kMaxGaussianReach], sum = 0;
   for (int i = lo; i <= hi && count < kMaxGaussianReach; ++i, ++count) {
-    weights[count] = gaussian1d(f, x - (float(i) + 0.5f));
-    sum += weights[count];
+    w[count] = gaussian1d(f, double(x) - (i + 0.5));
+    sum += w[count];
   }
   *first = lo;
-  if (!(sum > 0)) return 0;
-  for (int k = 0; k < count; ++k) weights[k] /= sum;
+  if (!(sum > 0)) {
+    // No centre with a weight (the filter underflowed between two of them): the nearest pixel
+    // takes the splat, so that it still counts once and every pixel's filter still integrates
+    // to one.
+    *first = int(std::floor(x));
+    weights[0] = 1;
+    return 1;
+  }
+  for (int k = 0; k < count; ++k) weights[k] = float(w[k] / sum);
   return count;
 }
 
@@ -69,6 +78,8 @@ void SplatBuffer::clear() {
 }
 
 void SplatBuffer::add(const Vec2f& film, const Spectrum& v, float scale) {
+  // Far outside the film (or not a number) a splat reaches no pixel; the casts below need it.
+  if (!(std::fabs(film.x) < 1e7f && std::fabs(film.y) < 1e7f)) return;
   auto put = [&](int x, int y, float w) {
     if (x < 0 || y < 0 || x >= width_ || y >= height_ || w <= 0) return;
     float* p = &data_[(size_t(y) * width_ + x) * 3];

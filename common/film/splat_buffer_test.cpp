@@ -41,6 +41,26 @@ TEST(SplatBuffer, InteriorSplatsKeepTheirValue) {
   }
 }
 
+// Gaussians that reach no pixel centre from some film points (radius under half a pixel) or
+// underflow between centres (a huge alpha): the nearest pixel takes those splats, so every splat
+// still counts once. The loaders refuse such filters; the film does not rely on it.
+TEST(SplatBuffer, NarrowGaussiansStillKeepEverySplat) {
+  for (PixelFilter f :
+       {PixelFilter{FilterType::Gaussian, 0.3f, 2}, PixelFilter{FilterType::Gaussian, 2, 5000}}) {
+    Rng rng(5, 3);
+    for (int k = 0; k < 200; ++k) {
+      SplatBuffer film(16, 16, f);
+      film.add({6 + 4 * rng.nextFloat(), 6 + 4 * rng.nextFloat()}, Spectrum(1.0f));
+      EXPECT_NEAR(total(film), 1.0, 1e-5) << f.radius << " " << f.alpha;
+    }
+  }
+  // Not a number, or far away: nothing, and no undefined conversion.
+  SplatBuffer film(4, 4, PixelFilter{FilterType::Gaussian, 2, 2});
+  film.add({NAN, 1}, Spectrum(1.0f));
+  film.add({1e30f, 1}, Spectrum(1.0f));
+  EXPECT_EQ(total(film), 0.0);
+}
+
 // Splats at uniform film points: pixel j receives on average N / pixels times the share of its
 // filter on the film (pixelFilterMassInside in x times in y), one inside and less near edges.
 // What RenderJob::resolve divides by; a filter whose pixels did not integrate to one, or a wrong

@@ -689,7 +689,9 @@ class MitsubaLoader {
         if (pugi::xml_node n = filterProps.take("stddev")) {
           requireTag(n, {"float", "integer"});
           stddev = number(n, requireValue(n), "parameter 'stddev'");
-          if (!(stddev > 0 && stddev <= 4)) fail(n, "stddev must be in (0, 4] pixels");
+          // Its radius 4 stddev must reach half a pixel, so that every film point reaches a
+          // pixel centre.
+          if (!(stddev >= 0.125 && stddev <= 4)) fail(n, "stddev must be in [0.125, 4] pixels");
         }
         rejectUnused(filterProps, "rfilter type 'gaussian'");
         cam.filter = FilterType::Gaussian;

@@ -139,7 +139,7 @@ class PbrtLoader {
     includeStack_.push_back(fs::absolute(path_).lexically_normal().string());
     parseFile(text, path_, 0);
     // pbrt-v4's default filter is a gaussian of radius 1.5 and sigma 0.5; v3's a box.
-    if (sawV4_ && !sawFilter_) setGaussian(1.5, 2);
+    if (sawV4_ && (!sawFilter_ || gaussianDefaults_)) setGaussian(1.5, 2);
     if (!sawWorld_) throw SceneLoadError(path_, 0, "no WorldBegin: the file describes no scene");
     if (!attributeStack_.empty())
       throw SceneLoadError(path_, 0, "AttributeBegin without AttributeEnd at the end of the file");
@@ -493,11 +493,14 @@ class PbrtLoader {
       if (objects_.count(d.strings[0])) fail(d, "object '" + d.strings[0] + "' is defined twice");
       // As pbrt: an attribute block around the definition.
       attributeStack_.push_back(attrs_);
+      objectBlockDepth_ = attributeStack_.size();
       inObject_ = true;
       objectName_ = d.strings[0];
       objects_[objectName_];
     } else if (n == "ObjectEnd") {
       if (!inObject_) fail(d, "ObjectEnd without ObjectBegin");
+      if (attributeStack_.size() != objectBlockDepth_)
+        fail(d, "ObjectEnd inside an AttributeBegin that the object's definition opened");
       inObject_ = false;
       attrs_ = attributeStack_.back();
       attributeStack_.pop_back();
@@ -585,6 +588,9 @@ class PbrtLoader {
       attributeStack_.push_back(attrs_);
     } else if (n == "AttributeEnd") {
       if (attributeStack_.empty()) fail(d, "AttributeEnd without AttributeBegin");
+      if (inObject_ && attributeStack_.size() <= objectBlockDepth_)
+        fail(d, "AttributeEnd would end the definition of object '" + objectName_ +
+                    "' (it needs ObjectEnd)");
       attrs_ = attributeStack_.back();
       attributeStack_.pop_back();
     } else if (n == "ActiveTransform") {
@@ -684,16 +690,20 @@ class PbrtLoader {
     } else if (type == "gaussian") {
       // v3: xwidth (2) and alpha (2); v4: xradius (1.5) and sigma (0.5), alpha = 1 / (2 sigma^2).
       const bool v4 = d.params.has("xradius") || d.params.has("yradius") || d.params.has("sigma");
+      // Without parameters the version decides the radius (v3's 2, v4's 1.5): settled at the
+      // end, when the file's materials have told it.
+      gaussianDefaults_ = d.params.params.empty();
       const double rx = radius("x", v4 ? 1.5 : 2), ry = radius("y", v4 ? 1.5 : 2);
       if (rx != ry) fail(d, "a gaussian filter with different x and y radii is not supported");
-      if (!(rx > 0 && rx <= 16)) fail(d, "gaussian filter radius must be in (0, 16] pixels");
+      // Below half a pixel some film points would reach no pixel centre.
+      if (!(rx >= 0.5 && rx <= 16)) fail(d, "gaussian filter radius must be in [0.5, 16] pixels");
       double alpha = getFloat(d, "alpha", 2);
       if (d.params.has("sigma")) {
         const double sigma = getFloat(d, "sigma", 0.5);
         if (!(sigma > 0)) fail(d, "gaussian sigma must be > 0");
         alpha = 1 / (2 * sigma * sigma);
       }
-      if (!(alpha > 0) || !std::isfinite(alpha)) fail(d, "gaussian alpha must be > 0");
+      if (!(alpha >= 0.01 && alpha <= 100)) fail(d, "gaussian alpha must be in [0.01, 100]");
       setGaussian(rx, alpha);
     } else {
       fail(d, "pixel filter '" + type +
@@ -1284,6 +1294,8 @@ class PbrtLoader {
     auto it = objects_.find(d.strings[0]);
     if (it == objects_.end()) fail(d, "object '" + d.strings[0] + "' is not defined");
     const Matrix4& m = attrs_.ctm;
+    if (std::fabs(determinant3(m)) < 1e-30 || !m.inverse().isFinite())
+      fail(d, "the instance's transformation is singular");
     const Matrix4 normalMatrix = m.inverse().transpose();
     const bool mirrors = determinant3(m) < 0;
     for (const ShapeDescription& original : it->second) {
@@ -1292,12 +1304,15 @@ class PbrtLoader {
           " instanced at " + fs::path(d.file).filename().string() + ":" + std::to_string(d.line);
       if (shape.type == ShapeDescription::Type::Sphere) {
         shape.center = m.applyPoint(shape.center);
+        // The instance's transformation moves normals by its inverse transpose, which keeps them
+        // on their side even under a mirror: orientation is the definition's (as in pbrt).
         shape.radius = float(shape.radius * similarityScale(d, m));
-        // A mirror turns the sphere inside out in pbrt's orientation rule.
-        if (mirrors) shape.flipNormals = !shape.flipNormals;
       } else {
         for (Vec3f& p : shape.positions) p = m.applyPoint(p);
-        for (Vec3f& n : shape.normals) n = normalize(normalMatrix.applyVector(n));
+        for (Vec3f& n : shape.normals) {
+          n = normalize(normalMatrix.applyVector(n));
+          if (!isFinite(n)) fail(d, "the instance's transformation makes a normal non-finite");
+        }
         // Without normals the winding tells the outside: a mirror would turn it round.
         if (mirrors)
           for (size_t t = 0; t < shape.indices.size(); t += 3)
@@ -1343,6 +1358,8 @@ class PbrtLoader {
   SceneDescription scene_;
   bool sawWorld_ = false, sawCamera_ = false, inObject_ = false;
   std::string objectName_;
+  size_t objectBlockDepth_ = 0;    // the attribute stack's size inside the definition's block
+  bool gaussianDefaults_ = false;  // a parameterless gaussian: v3's or v4's, known at the end
   std::map<std::string, std::vector<ShapeDescription>> objects_;
   Attributes attrs_;
   std::vector<Attributes> attributeStack_;

@@ -410,6 +410,11 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
       {"MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n", 5, "participating media"},
       {"ObjectInstance \"o\"\n", 5, "object 'o' is not defined"},
       {"ObjectEnd\n", 5, "ObjectEnd without ObjectBegin"},
+      {"ObjectBegin \"o\"\nAttributeEnd\n", 6, "AttributeEnd would end the definition"},
+      {"ObjectBegin \"o\"\nAttributeBegin\nObjectEnd\n", 7, "ObjectEnd inside an AttributeBegin"},
+      {"ObjectBegin \"o\"\n" + std::string(kTriangle) +
+           "ObjectEnd\nScale 1 1 0\nObjectInstance \"o\"\n",
+       9, "the instance's transformation is singular"},
       {"ObjectBegin \"o\"\nObjectBegin \"p\"\n", 6, "ObjectBegin inside the definition"},
       {"ObjectBegin \"o\"\nAreaLightSource \"diffuse\"\n" + std::string(kTriangle), 7,
        "area light inside an object definition"},
@@ -471,6 +476,9 @@ TEST(PbrtLoader, HeaderErrors) {
       {"PixelFilter \"mitchell\"\n", 4, "pixel filter 'mitchell' is not supported"},
       {"PixelFilter \"gaussian\" \"float xwidth\" 2 \"float ywidth\" 1\n", 4,
        "different x and y radii"},
+      {"PixelFilter \"gaussian\" \"float xwidth\" 0.3 \"float ywidth\" 0.3\n", 4,
+       "radius must be in [0.5, 16]"},
+      {"PixelFilter \"gaussian\" \"float alpha\" 1000\n", 4, "alpha must be in [0.01, 100]"},
       {"PixelFilter \"triangle\"\n", 4, "radius 1 only"},  // v3's default radius is 2
       {"Film \"image\" \"float cropwindow\" [0 0.5 0 0.5]\n", 4, "cropwindow"},
       {"Film \"image\" \"integer xresolution\" 0\n", 4, "outside 1..65536"},
@@ -543,6 +551,14 @@ TEST(PbrtLoader, ObjectInstancesAreFlattened) {
                     sh.positions[sh.indices[2]] - sh.positions[sh.indices[0]]);
     EXPECT_GT(n.z, 0) << sh.origin;
   }
+  // A sphere instanced through a mirror keeps its outside (the normal transformation keeps
+  // normals on their side), as in pbrt.
+  SceneDescription sp = loadPbrtScene(
+      dir.write("sp.pbrt", scene("ObjectBegin \"ball\"\nShape \"sphere\"\nObjectEnd\n"
+                                 "Translate 0 0 5\nScale -1 1 1\nObjectInstance \"ball\"\n")));
+  ASSERT_EQ(sp.shapes.size(), 1u);
+  EXPECT_FALSE(sp.shapes[0].flipNormals);
+  expectNear(sp.shapes[0].center, {0, 0, 5}, 1e-6f);
   // The ObjectEnd ended the definition's attribute block: the Translate 0 0 1 stayed inside.
   EXPECT_NE(s.shapes[1].origin.find("instanced at s.pbrt:"), std::string::npos);
 }
@@ -565,6 +581,10 @@ TEST(PbrtLoader, GaussianFilters) {
   EXPECT_EQ(implicit.filter, FilterType::Gaussian);
   EXPECT_FLOAT_EQ(implicit.filterRadius, 1.5f);
   EXPECT_FLOAT_EQ(implicit.filterAlpha, 2);
+  // A parameterless gaussian in a v4 file: v4's radius, which only the materials tell.
+  CameraDescription late =
+      filterOf("PixelFilter \"gaussian\"\n", "Material \"diffuse\"\n" + std::string(kTriangle));
+  EXPECT_FLOAT_EQ(late.filterRadius, 1.5f);
 }
 
 TEST(PbrtLoader, WarningsSayWhatWasIgnored) {
