@@ -984,20 +984,14 @@ class MitsubaLoader {
   // The uniform scale factor of a rotation-scale-translation matrix; spheres stay analytic, so an
   // ellipsoid-making transform is refused.
   double similarityScale(const pugi::xml_node& node, const Matrix4& t) const {
-    double col[3][3];
-    double len[3];
-    for (int j = 0; j < 3; ++j) {
-      for (int i = 0; i < 3; ++i) col[j][i] = t.m[i][j];
-      len[j] = std::sqrt(col[j][0] * col[j][0] + col[j][1] * col[j][1] + col[j][2] * col[j][2]);
-    }
-    double s = (len[0] + len[1] + len[2]) / 3.0;
-    for (int j = 0; j < 3; ++j) {
-      if (std::fabs(len[j] - s) > 1e-4 * s)
+    double s;
+    switch (similarityOf(t, &s)) {
+      case Similarity::NonUniformScale:
         fail(node, "sphere toWorld has a non-uniform scale (the sphere would be an ellipsoid)");
-      for (int k = j + 1; k < 3; ++k) {
-        double d = col[j][0] * col[k][0] + col[j][1] * col[k][1] + col[j][2] * col[k][2];
-        if (std::fabs(d) > 1e-4 * s * s) fail(node, "sphere toWorld has a shear");
-      }
+      case Similarity::Shear:
+        fail(node, "sphere toWorld has a shear");
+      case Similarity::Uniform:
+        break;
     }
     return s;
   }

@@ -643,11 +643,7 @@ class PbrtLoader {
     scene_.camera.fovDegrees = float(fov);
     // Lens radius and focus distance are in camera space: to world units by the (uniform)
     // scale of the camera's transformation.
-    double scale = 0;
-    for (int j = 0; j < 3; ++j) {
-      Vec3f e(j == 0, j == 1, j == 2);
-      scale += length(cameraToWorld.applyVector(e)) / 3;
-    }
+    const double scale = (double(lengths[0]) + lengths[1] + lengths[2]) / 3;
     scene_.camera.lensRadius = float(lensRadius * scale);
     scene_.camera.focusDistance = float(focusDistance * scale);
     scene_.camera.fovAxis = FovAxis::Smaller;  // pbrt's fov spans the shorter image axis
@@ -1338,17 +1334,14 @@ class PbrtLoader {
 
   // The uniform scale of a rotation-scale-translation matrix: spheres stay analytic.
   double similarityScale(const Directive& d, const Matrix4& t) const {
-    double len[3];
-    for (int j = 0; j < 3; ++j)
-      len[j] = std::sqrt(t.m[0][j] * t.m[0][j] + t.m[1][j] * t.m[1][j] + t.m[2][j] * t.m[2][j]);
-    double s = (len[0] + len[1] + len[2]) / 3;
-    for (int j = 0; j < 3; ++j) {
-      if (std::fabs(len[j] - s) > 1e-4 * s)
+    double s;
+    switch (similarityOf(t, &s)) {
+      case Similarity::NonUniformScale:
         fail(d, "a sphere under a non-uniform scale (an ellipsoid) is not supported");
-      for (int k = j + 1; k < 3; ++k) {
-        double dp = t.m[0][j] * t.m[0][k] + t.m[1][j] * t.m[1][k] + t.m[2][j] * t.m[2][k];
-        if (std::fabs(dp) > 1e-4 * s * s) fail(d, "a sphere under a shear is not supported");
-      }
+      case Similarity::Shear:
+        fail(d, "a sphere under a shear is not supported");
+      case Similarity::Uniform:
+        break;
     }
     return s;
   }

@@ -142,6 +142,24 @@ void computeSmoothNormals(ShapeDescription* shape) {
   shape->normals = std::move(acc);
 }
 
+Similarity similarityOf(const Matrix4& t, double* scale) {
+  double col[3][3], len[3];
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) col[j][i] = t.m[i][j];
+    len[j] = std::sqrt(col[j][0] * col[j][0] + col[j][1] * col[j][1] + col[j][2] * col[j][2]);
+  }
+  const double s = (len[0] + len[1] + len[2]) / 3.0;
+  *scale = s;
+  for (int j = 0; j < 3; ++j) {
+    if (std::fabs(len[j] - s) > 1e-4 * s) return Similarity::NonUniformScale;
+    for (int k = j + 1; k < 3; ++k) {
+      const double d = col[j][0] * col[k][0] + col[j][1] * col[k][1] + col[j][2] * col[k][2];
+      if (std::fabs(d) > 1e-4 * s * s) return Similarity::Shear;
+    }
+  }
+  return Similarity::Uniform;
+}
+
 double determinant3(const Matrix4& t) {
   const auto& m = t.m;
   return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -

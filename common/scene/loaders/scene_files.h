@@ -63,4 +63,9 @@ void computeSmoothNormals(ShapeDescription* shape);
 // The determinant of the upper 3x3 block: negative for a mirroring transform.
 double determinant3(const Matrix4& t);
 
+// Whether the upper 3x3 block is a rotation (or reflection) times a uniform scale, to a relative
+// 1e-4; *scale receives the (mean) scale. Spheres and cameras take only such transformations.
+enum class Similarity { Uniform, NonUniformScale, Shear };
+Similarity similarityOf(const Matrix4& t, double* scale);
+
 }  // namespace farm
