@@ -38,33 +38,45 @@ Image render(Algorithm algorithm, int64_t spp, uint64_t seed, float lensRadius =
   return renderLocally(job).image;
 }
 
+// Two estimators of the same image, each rendered twice with different seeds. Over the image,
+// the squared differences of their averages are explained by their variance (each pixel's from
+// its pair): the ratio of the sums is one for unbiased estimators, and a biased one (a lens
+// point missed, a density from the lens's centre) adds its squared bias. Their means differ by
+// noise of standard error `se`, to which the second's relative error zRel (its Z's) is added.
+struct Agreement {
+  double meanA = 0, meanB = 0, se = 0, ratio = 0;
+};
+Agreement compare(const Image (&a)[2], const Image (&b)[2], double zRel = 0) {
+  const size_t n = a[0].rgb.size();
+  double sum[2] = {0, 0}, var = 0, squared = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double ma = 0.5 * (a[0].rgb[i] + a[1].rgb[i]), mb = 0.5 * (b[0].rgb[i] + b[1].rgb[i]);
+    const double da = a[0].rgb[i] - a[1].rgb[i], db = b[0].rgb[i] - b[1].rgb[i];
+    var += (da * da + db * db) / 4;
+    sum[0] += ma, sum[1] += mb;
+    squared += (ma - mb) * (ma - mb);
+  }
+  Agreement g;
+  g.meanA = sum[0] / double(n);
+  g.meanB = sum[1] / double(n);
+  g.se = std::hypot(std::sqrt(var) / double(n), g.meanB * zRel);
+  g.ratio = squared / var;
+  return g;
+}
+
 TEST(ThinLens, PathTracingAndBidirectionalAgree) {
   Image pt[2] = {render(Algorithm::PathTracing, 64, 1), render(Algorithm::PathTracing, 64, 2)};
   Image bd[2] = {render(Algorithm::Bidirectional, 16, 3), render(Algorithm::Bidirectional, 16, 4)};
-  const size_t n = pt[0].rgb.size();
-  ASSERT_EQ(n, size_t(64 * 32 * 3));
-  // Over the image, the squared differences of the two estimators' averages are explained by
-  // their variance (each pixel's from its pair): the ratio of the sums is one for unbiased
-  // estimators. A biased one (a lens point missed, a density from the lens's centre) adds its
-  // squared bias.
-  double sum[2] = {0, 0}, var[2] = {0, 0}, squared = 0;
-  for (size_t i = 0; i < n; ++i) {
-    double a = 0.5 * (pt[0].rgb[i] + pt[1].rgb[i]), b = 0.5 * (bd[0].rgb[i] + bd[1].rgb[i]);
-    var[0] += (pt[0].rgb[i] - pt[1].rgb[i]) * (pt[0].rgb[i] - pt[1].rgb[i]) / 4;
-    var[1] += (bd[0].rgb[i] - bd[1].rgb[i]) * (bd[0].rgb[i] - bd[1].rgb[i]) / 4;
-    sum[0] += a, sum[1] += b;
-    squared += (a - b) * (a - b);
-  }
-  const double se = std::sqrt(var[0] + var[1]) / double(n);
-  EXPECT_NEAR(sum[0] / double(n), sum[1] / double(n), 4 * se);
+  ASSERT_EQ(pt[0].rgb.size(), size_t(64 * 32 * 3));
+  const Agreement g = compare(pt, bd);
+  EXPECT_NEAR(g.meanA, g.meanB, 4 * g.se);
   // The ratio's spread over 6000 pixels is a few percent; 1.3 leaves room for the variance
   // estimates' own noise.
-  const double ratio = squared / (var[0] + var[1]);
-  EXPECT_LT(ratio, 1.3);
+  EXPECT_LT(g.ratio, 1.3);
   std::printf(
       "thin lens: means pt %.4f bdpt %.4f (se %.4f), squared differences over variance "
       "%.3f\n",
-      sum[0] / double(n), sum[1] / double(n), se, ratio);
+      g.meanA, g.meanB, g.se, g.ratio);
 }
 
 // Light tracing alone against next-event estimation alone, each unweighted, on the paths of two
@@ -133,28 +145,18 @@ void expectChainAgreesWithPathTracing(Algorithm algorithm, int64_t mpp) {
     RenderJob job(loadScene(kScene, s), s, "thin-lens");
     mc[k] = renderLocally(job);
   }
-  const size_t n = pt[0].rgb.size();
-  double sum[2] = {0, 0}, var = 0, squared = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const double a = 0.5 * (pt[0].rgb[i] + pt[1].rgb[i]);
-    const double b = 0.5 * (mc[0].image.rgb[i] + mc[1].image.rgb[i]);
-    const double da = pt[0].rgb[i] - pt[1].rgb[i], db = mc[0].image.rgb[i] - mc[1].image.rgb[i];
-    var += (da * da + db * db) / 4;
-    sum[0] += a, sum[1] += b;
-    squared += (a - b) * (a - b);
-  }
   const double z = 0.5 * (mc[0].bootstrap.normalization + mc[1].bootstrap.normalization);
   const double zRel =
       0.5 *
       std::hypot(mc[0].bootstrap.normalizationStdError, mc[1].bootstrap.normalizationStdError) / z;
-  const double mean = sum[1] / double(n);
-  const double se = std::hypot(std::sqrt(var) / double(n), mean * zRel);
-  EXPECT_NEAR(sum[0] / double(n), mean, 4 * se) << algorithmName(algorithm);
-  EXPECT_LT(squared / var, 1.5) << algorithmName(algorithm);
+  const Image chain[2] = {mc[0].image, mc[1].image};
+  const Agreement g = compare(pt, chain, zRel);
+  EXPECT_NEAR(g.meanA, g.meanB, 4 * g.se) << algorithmName(algorithm);
+  EXPECT_LT(g.ratio, 1.5) << algorithmName(algorithm);
   std::printf(
       "thin lens %s: means pt %.4f, chain %.4f (se %.4f, Z %.2f%%), squared differences "
       "over variance %.3f\n",
-      algorithmName(algorithm), sum[0] / double(n), mean, se, 100 * zRel, squared / var);
+      algorithmName(algorithm), g.meanA, g.meanB, g.se, 100 * zRel, g.ratio);
 }
 
 TEST(ThinLens, PssmltAgreesWithPathTracing) {
