@@ -13,9 +13,13 @@ LocalChainSource::LocalChainSource(Coordinator* coordinator, int threads)
   if (!s.isOk()) throw SourceRefused(s.message());
 }
 
-std::vector<LeasedChain> LocalChainSource::lease(int max) {
+std::vector<LeasedChain> LocalChainSource::lease(int max, double waitSeconds) {
   std::vector<WorkerLease> leases;
-  Status s = coordinator_->leaseChains(workerId_, max, &leases);
+  const auto wait = interrupted_ ? SteadyClock::duration::zero()
+                                 : std::chrono::duration_cast<SteadyClock::duration>(
+                                       std::chrono::duration<double>(waitSeconds));
+  Status s = coordinator_->leaseChains(workerId_, max, &leases, wait,
+                                       [this] { return interrupted_.load(); });
   if (!s.isOk()) throw SourceRefused(s.message());
   std::vector<LeasedChain> chains;
   for (WorkerLease& w : leases) {
@@ -27,6 +31,11 @@ std::vector<LeasedChain> LocalChainSource::lease(int max) {
     chains.push_back(std::move(chain));
   }
   return chains;
+}
+
+void LocalChainSource::interrupt() {
+  interrupted_ = true;
+  coordinator_->wakeLeaseWaiters();
 }
 
 std::shared_ptr<const RenderJob> LocalChainSource::renderJob(const LeasedChain& chain) {

@@ -1,5 +1,6 @@
 #include "coordinator/coordinator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -41,6 +42,7 @@ Coordinator::~Coordinator() {
   }
   housekeepingWake_.notify_all();
   housekeeper_.join();
+  releaseLeaseWaiters();
   std::vector<std::shared_ptr<Job>> jobs;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -104,7 +106,7 @@ Status Coordinator::submit(JobSpec spec, std::string* jobId) {
     job = std::make_shared<Job>(id, std::move(spec),
                                 std::chrono::duration_cast<SteadyClock::duration>(
                                     std::chrono::duration<double>(options_.leaseSeconds)),
-                                outputDir, options_.log);
+                                outputDir, options_.log, [this] { wakeLeaseWaiters(); });
     if (options_.log) {
       options_.log("job " + id + ": submitted (" + job->spec().name + ", " +
                    algorithmName(job->spec().settings.algorithm) + ")");
@@ -205,29 +207,79 @@ Status Coordinator::findWorker(const std::string& workerId, WorkerInfo* info) co
   return Status::ok();
 }
 
-Status Coordinator::leaseChains(const std::string& workerId, int max,
-                                std::vector<WorkerLease>* leases) {
-  WorkerInfo worker;
-  Status status = findWorker(workerId, &worker);
-  if (!status.isOk()) return status;
-  if (max < 1 || max > 4096) {
-    return Status::invalidArgument("max chains must be in [1, 4096], got " + std::to_string(max));
-  }
+std::vector<WorkerLease> Coordinator::leaseNow(const std::string& workerId,
+                                               const WorkerInfo& worker, int max) {
   std::vector<std::shared_ptr<Job>> jobs;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     jobs = jobs_;
   }
   const auto now = SteadyClock::now();
-  leases->clear();
+  std::vector<WorkerLease> leases;
   for (auto& job : jobs) {
-    if (int(leases->size()) >= max) break;
+    if (int(leases.size()) >= max) break;
     if (!worker.capabilities.count(job->spec().settings.algorithm)) continue;
-    for (WorkerLease& lease : job->lease(workerId, max - int(leases->size()), now)) {
-      leases->push_back(std::move(lease));
+    for (WorkerLease& lease : job->lease(workerId, max - int(leases.size()), now)) {
+      leases.push_back(std::move(lease));
     }
   }
+  return leases;
+}
+
+Status Coordinator::leaseChains(const std::string& workerId, int max,
+                                std::vector<WorkerLease>* leases, SteadyClock::duration wait,
+                                const std::function<bool()>& abandoned) {
+  WorkerInfo worker;
+  Status status = findWorker(workerId, &worker);
+  if (!status.isOk()) return status;
+  if (max < 1 || max > 4096) {
+    return Status::invalidArgument("max chains must be in [1, 4096], got " + std::to_string(max));
+  }
+  const auto deadline =
+      SteadyClock::now() + std::clamp(wait, SteadyClock::duration::zero(), kMaxLeaseWait);
+  bool waiting = false;
+  for (;;) {
+    // The generation is read before looking for chains, so that a chain freed between the
+    // look and the wait still wakes the wait.
+    uint64_t generation;
+    {
+      std::lock_guard<std::mutex> lock(workMutex_);
+      generation = workGeneration_;
+    }
+    *leases = leaseNow(workerId, worker, max);
+    if (!leases->empty()) break;
+    std::unique_lock<std::mutex> lock(workMutex_);
+    const auto now = SteadyClock::now();
+    if (leaseWaitsReleased_ || now >= deadline || (abandoned && abandoned())) break;
+    if (!waiting) {
+      if (leaseWaiters_ >= kMaxLeaseWaiters) break;  // the worker retries on its own timer
+      ++leaseWaiters_;
+      waiting = true;
+    }
+    workWake_.wait_until(lock, std::min(deadline, now + std::chrono::seconds(1)),
+                         [&] { return workGeneration_ != generation || leaseWaitsReleased_; });
+  }
+  if (waiting) {
+    std::lock_guard<std::mutex> lock(workMutex_);
+    --leaseWaiters_;
+  }
   return Status::ok();
+}
+
+void Coordinator::wakeLeaseWaiters() {
+  {
+    std::lock_guard<std::mutex> lock(workMutex_);
+    ++workGeneration_;
+  }
+  workWake_.notify_all();
+}
+
+void Coordinator::releaseLeaseWaiters() {
+  {
+    std::lock_guard<std::mutex> lock(workMutex_);
+    leaseWaitsReleased_ = true;
+  }
+  workWake_.notify_all();
 }
 
 Status Coordinator::renewLeases(const std::string& workerId, const std::vector<LeaseRef>& leases,

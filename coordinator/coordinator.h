@@ -62,8 +62,19 @@ class Coordinator {
 
   // --- Worker side
   Status registerWorker(const WorkerInfo& info, std::string* workerId);
-  // Chains from the oldest rendering job first, only of algorithms the worker runs.
-  Status leaseChains(const std::string& workerId, int max, std::vector<WorkerLease>* leases);
+  // Chains from the oldest rendering job first, only of algorithms the worker runs. When none
+  // is free, waits up to `wait` (capped at kMaxLeaseWait) for one to become free (a job's
+  // bootstrap ending, a lease expiring) and answers at once when it does; `abandoned`, checked
+  // every second, ends the wait early (the caller went away).
+  static constexpr SteadyClock::duration kMaxLeaseWait = std::chrono::seconds(10);
+  Status leaseChains(const std::string& workerId, int max, std::vector<WorkerLease>* leases,
+                     SteadyClock::duration wait = SteadyClock::duration::zero(),
+                     const std::function<bool()>& abandoned = {});
+  // Ends every lease wait now and refuses new ones (the server is shutting down).
+  void releaseLeaseWaiters();
+  // Makes every lease wait look for chains again and re-check its `abandoned` now; jobs call it
+  // when chains become free, an embedded worker when it stops.
+  void wakeLeaseWaiters();
   Status renewLeases(const std::string& workerId, const std::vector<LeaseRef>& leases,
                      std::vector<LeaseRef>* lost);
   Status acceptFlush(const std::string& workerId, const std::string& jobId, uint64_t epoch,
@@ -77,9 +88,20 @@ class Coordinator {
   std::shared_ptr<Job> findJob(const std::string& jobId) const;
   Status findWorker(const std::string& workerId, WorkerInfo* info) const;
   void housekeeping();
+  std::vector<WorkerLease> leaseNow(const std::string& workerId, const WorkerInfo& worker, int max);
 
   const CoordinatorOptions options_;
   BlobStore blobs_;
+
+  // Lease waits sleep on workWake_ until workGeneration_ moves (wakeLeaseWaiters) or they time out;
+  // at most kMaxLeaseWaiters at once, since each holds one of the server's threads.
+  // Declared before the jobs, which signal them, so that they outlive the jobs.
+  static constexpr int kMaxLeaseWaiters = 256;
+  std::mutex workMutex_;
+  std::condition_variable workWake_;
+  uint64_t workGeneration_ = 0;
+  int leaseWaiters_ = 0;
+  bool leaseWaitsReleased_ = false;
 
   mutable std::mutex mutex_;
   std::vector<std::shared_ptr<Job>> jobs_;  // submission order

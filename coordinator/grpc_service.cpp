@@ -398,12 +398,20 @@ class WorkerService final : public v1::WorkerApi::Service {
     return grpc::Status::OK;
   }
 
-  grpc::Status LeaseChains(grpc::ServerContext*, const v1::LeaseChainsRequest* request,
+  grpc::Status LeaseChains(grpc::ServerContext* context, const v1::LeaseChainsRequest* request,
                            v1::LeaseChainsResponse* response) override {
     grpc::Status check = checkId(request->worker_id(), "worker id");
     if (!check.ok()) return check;
+    const auto maxWait =
+        std::chrono::duration_cast<std::chrono::milliseconds>(Coordinator::kMaxLeaseWait);
+    if (request->wait_ms() < 0 || request->wait_ms() > maxWait.count()) {
+      return invalid("wait_ms must be in [0, " + std::to_string(maxWait.count()) + "], got " +
+                     std::to_string(request->wait_ms()));
+    }
     std::vector<WorkerLease> leases;
-    Status s = coordinator_->leaseChains(request->worker_id(), request->max_chains(), &leases);
+    Status s = coordinator_->leaseChains(request->worker_id(), request->max_chains(), &leases,
+                                         std::chrono::milliseconds(request->wait_ms()),
+                                         [context] { return context->IsCancelled(); });
     if (!s.isOk()) return toGrpc(s);
     const auto steadyNow = SteadyClock::now();
     const auto systemNow = std::chrono::system_clock::now();
@@ -588,7 +596,7 @@ class WorkerService final : public v1::WorkerApi::Service {
 class GrpcCoordinatorServer final : public CoordinatorServer {
  public:
   explicit GrpcCoordinatorServer(Coordinator* coordinator)
-      : clientService_(coordinator), workerService_(coordinator) {}
+      : coordinator_(coordinator), clientService_(coordinator), workerService_(coordinator) {}
 
   bool start(const std::string& address, std::string* error) {
     grpc::EnableDefaultHealthCheckService(true);
@@ -613,6 +621,7 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
 
   void shutdown() override {
     if (!server_) return;
+    coordinator_->releaseLeaseWaiters();  // else Shutdown waits out their calls
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
     server_->Wait();
     server_.reset();
@@ -621,6 +630,7 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
   ~GrpcCoordinatorServer() override { shutdown(); }
 
  private:
+  Coordinator* coordinator_;
   ClientService clientService_;
   WorkerService workerService_;
   std::unique_ptr<grpc::Server> server_;

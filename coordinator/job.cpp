@@ -48,13 +48,14 @@ std::string withoutPrefix(std::string message, const std::string& root) {
 }  // namespace
 
 Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
-         Log log)
+         Log log, std::function<void()> workFreed)
     : id_(std::move(id)),
       spec_(std::move(spec)),
       leaseDuration_(leaseDuration),
       outputDir_(std::move(outputDir)),
       submitted_(SteadyClock::now()),
-      log_(std::move(log)) {}
+      log_(std::move(log)),
+      workFreed_(std::move(workFreed)) {}
 
 Job::~Job() {
   cancelRequested_ = true;
@@ -145,6 +146,7 @@ void Job::prepare() {
     }
     log("rendering " + std::to_string(count) + " chains (" + std::to_string(width_) + "x" +
         std::to_string(height_) + ", " + algorithmName(spec_.settings.algorithm) + z + ")");
+    if (workFreed_) workFreed_();
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (isTerminal(phase_)) return;  // a cancelled bootstrap throws too
@@ -246,6 +248,7 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       ack->reason = "chain " + std::to_string(chain) + " yields to waiting chains";
       ack->yielded = true;
       scheduler_->yieldChain(chain);
+      if (workFreed_) workFreed_();
     }
   }
   if (outcome == FlushOutcome::kAccepted) recordErrorLocked(now, false);
@@ -260,6 +263,7 @@ void Job::tick(SteadyClock::time_point now) {
     log(std::to_string(expired) + " lease(s) expired; " +
         (scheduler_->stopping() ? "those chains end there"
                                 : "those chains resume from their last accepted flush"));
+    if (!scheduler_->stopping() && workFreed_) workFreed_();
   }
   enforceBudgetLocked(now);
   finishIfCompleteLocked(now);

@@ -92,8 +92,10 @@ struct FlushAck {
 class Job {
  public:
   using Log = std::function<void(const std::string&)>;
+  // `workFreed` is called (under the job's lock: it must not call back into the job) whenever
+  // chains become free to lease: the bootstrap ended, leases expired, a chain yielded.
   Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
-      Log log = {});
+      Log log = {}, std::function<void()> workFreed = {});
   ~Job();  // cancels and joins the preparation thread
   Job(const Job&) = delete;
   Job& operator=(const Job&) = delete;
@@ -146,6 +148,7 @@ class Job {
   const std::string outputDir_;
   const SteadyClock::time_point submitted_;
   const Log log_;
+  const std::function<void()> workFreed_;
 
   mutable std::mutex mutex_;
   mutable std::condition_variable endedSignal_;

@@ -412,6 +412,22 @@ TEST_F(HostileRpcTest, IncompatibleWorkerIsRefused) {
                 "protocol");
 }
 
+TEST_F(HostileRpcTest, LeaseWaitOutsideItsRangeIsRejected) {
+  const std::string workerId = registerWorker();
+  auto stub = worker();
+  for (int waitMs : {-1, 10001, std::numeric_limits<int32_t>::min()}) {
+    grpc::ClientContext context;
+    withDeadline(&context);
+    v1::LeaseChainsRequest request;
+    request.set_worker_id(workerId);
+    request.set_max_chains(1);
+    request.set_wait_ms(waitMs);
+    v1::LeaseChainsResponse response;
+    EXPECT_STATUS(stub->LeaseChains(&context, request, &response), INVALID_ARGUMENT,
+                  "wait_ms must be in [0, 10000]");
+  }
+}
+
 TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   LeasedJob job = startJobAndLease();
   ASSERT_FALSE(job.jobId.empty());

@@ -35,8 +35,9 @@ class ScriptedSource : public ChainSource {
     }
   }
 
-  std::vector<LeasedChain> lease(int max) override {
+  std::vector<LeasedChain> lease(int max, double waitSeconds) override {
     std::lock_guard<std::mutex> lock(mutex_);
+    asks_.emplace_back(running_, waitSeconds);
     if (refuse_) throw SourceRefused("protocol mismatch (scripted)");
     if (unavailableLeft_ > 0) {
       --unavailableLeft_;
@@ -79,6 +80,7 @@ class ScriptedSource : public ChainSource {
   int unavailableLeft_ = 0;
   bool refuse_ = false;
   int running_ = 0, maxConcurrent_ = 0;
+  std::vector<std::pair<int, double>> asks_;  // (chains running, wait) at each lease
 };
 
 void runUntil(WorkerPool& pool, ScriptedSource& source, size_t flushes) {
@@ -113,6 +115,15 @@ TEST(WorkerPool, RunsEveryChainWithinItsThreadCount) {
   EXPECT_EQ(pool.stats().chainsStarted, 6);
   EXPECT_EQ(pool.stats().flushesAccepted, 24);
   EXPECT_EQ(pool.stats().work, 6 * 4096);
+  // Idle, the pool waits at the source for work; with chains running it must not (their leases
+  // need renewing).
+  ASSERT_FALSE(source.asks_.empty());
+  EXPECT_EQ(source.asks_.front().second, options.leaseWaitSeconds);
+  for (const auto& [running, wait] : source.asks_) {
+    if (running > 0) {
+      EXPECT_EQ(wait, 0.0) << "asked with a wait while " << running << " ran";
+    }
+  }
 }
 
 TEST(WorkerPool, FailedUploadAndStopEndOnlyTheirChain) {

@@ -44,9 +44,14 @@ class SourceRefused : public std::runtime_error {
 class ChainSource {
  public:
   virtual ~ChainSource() = default;
-  // Up to `max` chains to run now; empty when there is no work at the moment. Throws
-  // SourceUnavailable or SourceRefused.
-  virtual std::vector<LeasedChain> lease(int max) = 0;
+  // Up to `max` chains to run now; empty when there is no work at the moment. With
+  // `waitSeconds` > 0 the source may hold the call that long for work to appear and answer as
+  // soon as it does (a source that cannot wait answers at once). Throws SourceUnavailable or
+  // SourceRefused.
+  virtual std::vector<LeasedChain> lease(int max, double waitSeconds) = 0;
+  // Ends a lease() wait in progress (it returns no chains) and makes later ones answer at once:
+  // the pool is stopping. May be called from any thread.
+  virtual void interrupt() {}
   // The renderer's job for a leased chain (loads the scene on first use). Throws on failure.
   virtual std::shared_ptr<const RenderJob> renderJob(const LeasedChain& chain) = 0;
   // Delivers one flush (retrying what can be retried). Throws when it cannot be delivered: the

@@ -3,6 +3,7 @@
 #include <grpcpp/grpcpp.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -60,6 +61,9 @@ struct RemoteChainSource::Impl {
   std::mutex mutex;  // guards the registration
   std::string workerId;
   double leaseSeconds = 30;
+  std::mutex leaseMutex;  // guards the interruption
+  bool interrupted = false;
+  grpc::ClientContext* waitingLease = nullptr;  // the lease call in progress, if any
 
   void log(const std::string& line) const {
     if (options.log) options.log(line);
@@ -243,7 +247,8 @@ double RemoteChainSource::renewIntervalSeconds() const {
   return std::max(0.2, impl_->leaseSeconds / 3);
 }
 
-std::vector<LeasedChain> RemoteChainSource::lease(int max) {
+std::vector<LeasedChain> RemoteChainSource::lease(int max, double waitSeconds) {
+  const int waitMs = int(std::clamp(waitSeconds, 0.0, 10.0) * 1000);
   for (int attempt = 0;; ++attempt) {
     const std::string id = impl_->ensureRegistered(attempt > 0);
     v1::LeaseChainsRequest request;
@@ -251,8 +256,19 @@ std::vector<LeasedChain> RemoteChainSource::lease(int max) {
     request.set_max_chains(max);
     v1::LeaseChainsResponse response;
     grpc::ClientContext context;
-    setDeadline(&context, kUnaryDeadline);
+    {
+      std::lock_guard<std::mutex> lock(impl_->leaseMutex);
+      request.set_wait_ms(impl_->interrupted ? 0 : waitMs);
+      impl_->waitingLease = &context;
+    }
+    context.set_deadline(std::chrono::system_clock::now() + kUnaryDeadline +
+                         std::chrono::milliseconds(request.wait_ms()));
     grpc::Status status = impl_->stub->LeaseChains(&context, request, &response);
+    {
+      std::lock_guard<std::mutex> lock(impl_->leaseMutex);
+      impl_->waitingLease = nullptr;
+      if (impl_->interrupted && status.error_code() == grpc::StatusCode::CANCELLED) return {};
+    }
     if (Impl::forgotWorker(status) && attempt == 0) continue;
     if (!status.ok()) {
       const std::string message =
@@ -277,6 +293,12 @@ std::vector<LeasedChain> RemoteChainSource::lease(int max) {
     }
     return chains;
   }
+}
+
+void RemoteChainSource::interrupt() {
+  std::lock_guard<std::mutex> lock(impl_->leaseMutex);
+  impl_->interrupted = true;
+  if (impl_->waitingLease) impl_->waitingLease->TryCancel();
 }
 
 std::shared_ptr<const RenderJob> RemoteChainSource::renderJob(const LeasedChain& chain) {

@@ -24,7 +24,8 @@ class RemoteChainSource final : public ChainSource {
   explicit RemoteChainSource(RemoteSourceOptions options);
   ~RemoteChainSource() override;
 
-  std::vector<LeasedChain> lease(int max) override;
+  std::vector<LeasedChain> lease(int max, double waitSeconds) override;
+  void interrupt() override;
   std::shared_ptr<const RenderJob> renderJob(const LeasedChain& chain) override;
   FlushReceipt upload(const LeasedChain& chain, ChainFlush&& flush) override;
   std::vector<bool> renew(const std::vector<const LeasedChain*>& chains) override;

@@ -36,6 +36,7 @@ void WorkerPool::stop() {
     stopping_ = true;
   }
   wake_.notify_all();
+  source_->interrupt();  // run() may be waiting at the source for work
 }
 
 WorkerPoolStats WorkerPool::stats() const {
@@ -109,12 +110,14 @@ void WorkerPool::run() {
     if (running < options_.threads && now >= nextLease) {
       lock.unlock();
       std::vector<LeasedChain> leases;
+      const auto asked = Clock::now();
       try {
-        leases = source_->lease(options_.threads - running);
+        leases = source_->lease(options_.threads - running,
+                                running == 0 ? options_.leaseWaitSeconds : 0.0);
         if (backoff > 0) log("the coordinator is reachable again");
         backoff = 0;
-        nextLease = Clock::now() +
-                    (leases.empty() ? seconds(options_.idleRetrySeconds) : Clock::duration::zero());
+        // Measured from the ask: after a wait that found nothing, ask again at once.
+        nextLease = leases.empty() ? asked + seconds(options_.idleRetrySeconds) : Clock::now();
       } catch (const SourceRefused& e) {
         refused = e.what();
         lock.lock();

@@ -16,8 +16,11 @@
 namespace farm {
 
 struct WorkerPoolOptions {
-  int threads = 1;                              // chains run at once
-  double idleRetrySeconds = 0.25;               // when the source had no work
+  int threads = 1;                 // chains run at once
+  double idleRetrySeconds = 0.25;  // between asks when the source had no work
+  // An idle pool's ask waits this long at the source for work to appear (and gets it the
+  // moment it does); a busy pool asks without waiting, since it must also renew its leases.
+  double leaseWaitSeconds = 1;
   double maxBackoffSeconds = 5;                 // longest wait while the source is unreachable
   std::function<void(const std::string&)> log;  // progress and trouble, one line each
 };
