@@ -335,6 +335,16 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
                              " yet (its mutations keep each seed's lens point): use pt, bdpt, "
                              "pssmlt, pssmlt-pt or mmlt");
   }
+  // Their path-space mutations build and perturb vertices on surfaces only; a path from the
+  // environment (a vertex at infinity) is not one of theirs yet.
+  if (desc.environment.present &&
+      (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
+    throw SceneLoadError(path, 0,
+                         std::string("an environment light is not supported by ") +
+                             algorithmName(settings.algorithm) +
+                             " yet (its mutations do not build paths from infinity): use pt, "
+                             "bdpt, pssmlt, pssmlt-pt or mmlt");
+  }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);
   }

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "common/mcmc/primary_sample_integrand.h"
+#include "common/render/image_agreement.h"
 #include "common/render/local_render.h"
 #include "common/sampling/rng.h"
 #include "common/scene/loaders/scene_files.h"
@@ -36,32 +37,6 @@ Image render(Algorithm algorithm, int64_t spp, uint64_t seed, float lensRadius =
   }
   RenderJob job(scene, s, "thin-lens");
   return renderLocally(job).image;
-}
-
-// Two estimators of the same image, each rendered twice with different seeds. Over the image,
-// the squared differences of their averages are explained by their variance (each pixel's from
-// its pair): the ratio of the sums is one for unbiased estimators, and a biased one (a lens
-// point missed, a density from the lens's centre) adds its squared bias. Their means differ by
-// noise of standard error `se`, to which the second's relative error zRel (its Z's) is added.
-struct Agreement {
-  double meanA = 0, meanB = 0, se = 0, ratio = 0;
-};
-Agreement compare(const Image (&a)[2], const Image (&b)[2], double zRel = 0) {
-  const size_t n = a[0].rgb.size();
-  double sum[2] = {0, 0}, var = 0, squared = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const double ma = 0.5 * (a[0].rgb[i] + a[1].rgb[i]), mb = 0.5 * (b[0].rgb[i] + b[1].rgb[i]);
-    const double da = a[0].rgb[i] - a[1].rgb[i], db = b[0].rgb[i] - b[1].rgb[i];
-    var += (da * da + db * db) / 4;
-    sum[0] += ma, sum[1] += mb;
-    squared += (ma - mb) * (ma - mb);
-  }
-  Agreement g;
-  g.meanA = sum[0] / double(n);
-  g.meanB = sum[1] / double(n);
-  g.se = std::hypot(std::sqrt(var) / double(n), g.meanB * zRel);
-  g.ratio = squared / var;
-  return g;
 }
 
 TEST(ThinLens, PathTracingAndBidirectionalAgree) {

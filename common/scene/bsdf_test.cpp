@@ -224,9 +224,9 @@ TEST(Bsdf, PlasticIsTheSumOfItsLobes) {
   // Near grazing (78 degrees) the Fresnel term seen from the air is about 0.3 (less the
   // shadowing); pbrt-v3's, computed from inside the coating, would reflect totally.
   const float c = 0.2f;
-  const Albedo grazing = quadratureAlbedo(Bsdf(plastic(0.05f, Spectrum(0.0f), Spectrum(1.0f))),
-                                          Vec3f(std::sqrt(1 - c * c), 0, c),
-                                          TransportMode::Radiance, 2000, 256);
+  const Albedo grazing =
+      quadratureAlbedo(Bsdf(plastic(0.05f, Spectrum(0.0f), Spectrum(1.0f))),
+                       Vec3f(std::sqrt(1 - c * c), 0, c), TransportMode::Radiance, 2000, 256);
   EXPECT_GT(grazing.total(), 0.15);
   EXPECT_LT(grazing.total(), 0.4);
   EXPECT_TRUE(Bsdf(plastic(0.05f, Spectrum(0.0f), Spectrum(0.0f))).isBlack());

@@ -148,7 +148,23 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
   rtcCommitScene(scene);
   throwOnEmbreeError(device, "committing the scene");
   if (n > 0) extent_ = std::max(1e-6f, 0.5f * length(hi - lo));
-  if (!std::isfinite(extent_)) extent_ = 1;
+  if (n > 0) center_ = (lo + hi) * 0.5f;
+  if (!std::isfinite(extent_) || !isFinite(center_)) extent_ = 1, center_ = Vec3f(0.0f);
+
+  if (desc_.environment.present) {
+    auto environment = std::make_unique<EnvironmentLight>(desc_.environment);
+    if (environment->luminanceIntegral() > 0) {
+      // Its flux through the disk that light subpaths leave by: the selection weight, in the
+      // units of the area lights' (radiance * area * pi).
+      AreaLight light;
+      light.shape = -1;
+      light.radiance = desc_.environment.scale;
+      light.power = float(double(kPi) * extent_ * extent_ * environment->luminanceIntegral());
+      environmentLight_ = int(lights_.size());
+      lights_.push_back(light);
+      environment_ = std::move(environment);
+    }
+  }
 
   double total = 0;
   for (const AreaLight& l : lights_) {
@@ -252,6 +268,22 @@ bool Scene::visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec
   return ray.tfar >= 0;  // Embree sets tfar to -inf on a hit
 }
 
+bool Scene::escapes(const Vec3f& p, const Vec3f& ng, const Vec3f& w) const {
+  Ray r = spawnRay(p, ng, w);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay ray;
+  ray.org_x = r.o.x, ray.org_y = r.o.y, ray.org_z = r.o.z;
+  ray.dir_x = w.x, ray.dir_y = w.y, ray.dir_z = w.z;
+  ray.tnear = 0;
+  ray.tfar = kInfinity;
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0;
+  rtcOccluded1(static_cast<RTCScene>(scene_), &context, &ray);
+  return ray.tfar >= 0;  // Embree sets tfar to -inf on a hit
+}
+
 int Scene::pickLight(float u, float* pdf) const {
   if (lights_.empty()) return -1;
   const double total = lightCdf_.back();
@@ -273,7 +305,7 @@ double Scene::lightPickProbability(int light) const {
 }
 
 double Scene::trianglePickProbability(int light, uint32_t t) const {
-  if (light < 0 || light >= int(lights_.size())) return 0;
+  if (light < 0 || light >= int(lights_.size()) || lights_[light].isEnvironment()) return 0;
   const std::vector<double>& cdf = triangleCdf_[lights_[light].shape];
   if (cdf.empty()) return 1;  // a sphere: one primitive
   if (t >= cdf.size()) return 0;

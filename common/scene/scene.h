@@ -6,6 +6,7 @@
 
 #include "common/scene/bsdf.h"
 #include "common/scene/camera.h"
+#include "common/scene/environment_light.h"
 #include "common/scene/scene_description.h"
 
 namespace farm {
@@ -20,12 +21,14 @@ struct SurfaceHit {
   uint32_t primitive = 0;
 };
 
-// An area light: one emitting shape, sampled uniformly by area, emitting on its normal's side.
+// A light: one emitting shape, sampled uniformly by area, emitting on its normal's side; or,
+// with shape -1, the environment (Scene::environment()), whose path vertices lie at infinity.
 struct AreaLight {
   int shape = -1;
   Spectrum radiance;
   float area = 0;
   float power = 0;  // luminance of radiance * area * pi: the light selection weight
+  bool isEnvironment() const { return shape < 0; }
 };
 
 // Mitsuba's strictNormals: a direction is usable at a surface only when the geometric and the
@@ -53,10 +56,15 @@ class Scene {
   int maxDepth() const { return desc_.maxDepth; }  // edges; -1 unbounded
   float extent() const { return extent_; }         // radius of the bounding sphere
 
+  Vec3f center() const { return center_; }  // of the bounding sphere
+
   // Closest hit along r within (0, r.tMax); false when the ray leaves the scene.
   bool intersect(const Ray& r, SurfaceHit* hit) const;
   // True when nothing blocks the segment between two points; pass n = 0 for a point (camera).
   bool visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1) const;
+  // True when nothing blocks the ray from p (geometric normal ng) in direction w: it reaches
+  // the environment.
+  bool escapes(const Vec3f& p, const Vec3f& ng, const Vec3f& w) const;
   // A ray leaving surface point p (geometric normal ng) in direction d, offset off the surface.
   Ray spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const;
 
@@ -71,7 +79,14 @@ class Scene {
   // Chooses a light in proportion to power; *pdf is its discrete probability.
   int pickLight(float u, float* pdf) const;
   float lightPickPdf(int light) const;
-  // Uniform point on the light; the area density is 1 / area.
+  // The environment, or null; environmentLight() is its index among lights() (or -1).
+  const EnvironmentLight* environment() const { return environment_.get(); }
+  int environmentLight() const { return environmentLight_; }
+  // Light subpaths leave the environment through a disk of the bounding sphere's radius facing
+  // their direction, uniformly: this is the disk's area density (pbrt-v3's infinite light emits
+  // the same way: a density of directions times one of positions on such a disk).
+  float environmentDiskDensity() const { return 1 / (kPi * extent_ * extent_); }
+  // Uniform point on an area light; the area density is 1 / area.
   void sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const;
   // The probability with which sampleLightPoint picks triangle t of a mesh light, as its CDF
   // makes it: what the area density 1 / area assumes to be area(t) / area. The CDFs are summed
@@ -81,7 +96,10 @@ class Scene {
   double trianglePickProbability(int light, uint32_t t) const;
   // The probability with which pickLight picks a light, as its CDF makes it.
   double lightPickProbability(int light) const;
+  // Radiance leaving light `light` in direction w at a point of normal n; for the environment,
+  // the radiance travelling in direction w (n is not used).
   Spectrum emitted(int light, const Vec3f& n, const Vec3f& w) const {
+    if (light == environmentLight_) return environment_->radiance(-w);
     return dot(n, w) > 0 ? lights_[light].radiance : Spectrum(0.0f);
   }
 
@@ -96,6 +114,9 @@ class Scene {
   std::vector<AreaLight> lights_;
   std::vector<double> lightCdf_;
   float extent_ = 1;
+  Vec3f center_{0.0f};
+  std::unique_ptr<EnvironmentLight> environment_;
+  int environmentLight_ = -1;
   void* device_ = nullptr;  // RTCDevice
   void* scene_ = nullptr;   // RTCScene
 };

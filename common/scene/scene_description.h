@@ -3,6 +3,7 @@
 // Scene (the renderer's ray-traceable form). Shapes are triangle meshes except spheres, which stay
 // analytic. Plain data: no Embree, no file handles.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,19 @@ struct ShapeDescription {
   std::string origin;  // e.g. "scene.xml:42 (obj models/Mesh001.obj)"
 };
 
+// Light from infinitely far away (Mitsuba's constant and envmap, pbrt's infinite): the radiance
+// arriving from world direction w (pointing away from the scene) is scale times the lat-long
+// image at w's direction in the light's frame, or scale alone without an image. The frame is
+// pbrt's: local z up, u = phi / 2 pi with phi = atan2(y, x), v = theta / pi from the image's top
+// row; toWorld takes it to world space (the Mitsuba loader folds its own y-up convention in).
+struct EnvironmentDescription {
+  bool present = false;
+  Spectrum scale{1.0f};
+  std::shared_ptr<const TextureImage> image;  // the lat-long map, or null for a constant
+  Matrix4 toWorld = Matrix4::identity();      // a rotation
+  std::string origin;                         // "scene.xml:12 (envmap sky.exr)", for messages
+};
+
 struct SceneDescription {
   std::string sourcePath;
   CameraDescription camera;
@@ -85,6 +99,7 @@ struct SceneDescription {
   std::vector<BsdfDescription> bsdfs;
   std::vector<TextureDescription> textures;
   std::vector<ShapeDescription> shapes;
+  EnvironmentDescription environment;
   // What the loader changed or left out, one line each ("FILE:LINE: ..."), for the user.
   std::vector<std::string> warnings;
 };

@@ -1,8 +1,9 @@
 #pragma once
 // Scenes the statistical tests write for themselves (test code only): the white furnace, with
-// its analytic answers, and a glass ball for the specular paths.
+// its analytic answers, a glass ball for the specular paths, and a sky for environment lights.
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include "common/scene/scene_description.h"
@@ -78,6 +79,23 @@ inline std::string glassBallScene() {
     return p;
   }();
   return path;
+}
+
+// A 64 x 32 lat-long map: a blue gradient sky, a small sun (two by two texels from column
+// sunColumn, rows 5 and 6) hundreds of times brighter, a dark ground.
+inline std::shared_ptr<TextureImage> latLongSky(int sunColumn) {
+  auto image = std::make_shared<TextureImage>();
+  image->width = 64;
+  image->height = 32;
+  image->floats.resize(64 * 32 * 3);
+  for (int y = 0; y < 32; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      Spectrum c = y < 16 ? Spectrum(0.2f + 0.02f * y, 0.4f, 0.9f) : Spectrum(0.1f, 0.08f, 0.05f);
+      if (y >= 5 && y <= 6 && x >= sunColumn && x <= sunColumn + 1) c = Spectrum(400, 350, 300);
+      for (int k = 0; k < 3; ++k) image->floats[3 * (size_t(y) * 64 + x) + k] = c[k];
+    }
+  }
+  return image;
 }
 
 }  // namespace farm

@@ -10,8 +10,10 @@ namespace farm {
 
 namespace {
 
-// Converts a solid-angle density at `from` towards `to` into an area density at `to`.
+// Converts a solid-angle density at `from` towards `to` into an area density at `to`; a vertex
+// at infinity keeps the solid-angle density.
 float toAreaDensity(float pdfSolidAngle, const Vec3f& from, const PathVertex& to) {
+  if (atInfinity(to)) return pdfSolidAngle;
   return float(toAreaDensity(double(pdfSolidAngle), from, to.p, to.n));
 }
 
@@ -38,9 +40,25 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
   while (count < maxVertices) {
     SurfaceHit hit;
     ++rays_;
-    if (!scene_.intersect(ray, &hit)) break;
     PathVertex& v = path[count];
     PathVertex& prev = path[count - 1];
+    if (!scene_.intersect(ray, &hit)) {
+      // A camera subpath that leaves the scene ends on the environment, at infinity: its
+      // density there is the direction's.
+      const int environment = scene_.environmentLight();
+      if (mode == TransportMode::Radiance && environment >= 0) {
+        v = PathVertex();
+        v.kind = PathVertex::Kind::Light;
+        v.n = v.ns = -ray.d;
+        v.p = ray.o + ray.d * (4 * scene_.extent() + length(ray.o - scene_.center()));
+        v.wo = -ray.d;
+        v.light = environment;
+        v.beta = beta;
+        v.pdfFwd = pdfDir;
+        ++count;
+      }
+      break;
+    }
     v = PathVertex();
     v.kind = PathVertex::Kind::Surface;
     v.p = hit.p;
@@ -51,7 +69,9 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
     v.shape = hit.shape;
     v.light = scene_.lightOf(hit.shape);
     v.beta = beta;
-    v.pdfFwd = toAreaDensity(pdfDir, prev.p, v);
+    // After the environment, pdfDir is the density of the disk the ray left (in the plane
+    // normal to its direction): projected onto the surface by its cosine.
+    v.pdfFwd = atInfinity(prev) ? pdfDir * absDot(v.n, prev.n) : toAreaDensity(pdfDir, prev.p, v);
     ++count;
     if (count >= maxVertices) break;
 
@@ -119,6 +139,31 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   float pickPdf;
   int l = scene_.pickLight(uPick, &pickPdf);
   const AreaLight& light = scene_.lights()[l];
+  if (light.isEnvironment()) {
+    // A direction w towards the environment by its importance, and a ray against it from a
+    // point of the disk of the bounding sphere's radius that faces w, outside the scene.
+    float pdfDir;
+    const Vec3f w = scene_.environment()->sample(uDir, &pdfDir);
+    if (!(pdfDir > 0)) return 0;
+    PathVertex& y = path[0];
+    y = PathVertex();
+    y.kind = PathVertex::Kind::Light;
+    y.n = y.ns = -w;
+    y.light = l;
+    y.pdfFwd = pickPdf * pdfDir;
+    y.beta = scene_.environment()->radiance(w) / y.pdfFwd;
+    const float radius = scene_.extent();
+    const Vec2f disk = squareToConcentricDisk({uPoint[0], uPoint[1]});
+    const Frame frame(w);
+    y.p = scene_.center() + (w + frame.s * disk.x + frame.t * disk.y) * radius;
+    if (maxVertices < 2 || isBlack(y.beta)) return 1;
+    const float pdfDisk = scene_.environmentDiskDensity();
+    Ray ray;
+    ray.o = y.p;
+    ray.d = -w;
+    return randomWalk(ray, y.beta / pdfDisk, pdfDisk, sampler, kLightStream,
+                      TransportMode::Importance, maxVertices, roulette, path);
+  }
   Vec3f p, n;
   scene_.sampleLightPoint(l, uPoint, &p, &n);
   PathVertex& y = path[0];
@@ -153,6 +198,20 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   }
   const PathVertex& y = lightPath[s - 1];
   if (y.delta) return Spectrum(0.0f);
+  if (atInfinity(y)) {                  // s == 1: the environment's direction, if nothing blocks it
+    if (t == 1) return Spectrum(0.0f);  // no direction of it reaches a point-like lens
+    const PathVertex& z = cameraPath[t - 1];
+    if (z.delta || z.kind != PathVertex::Kind::Surface) return Spectrum(0.0f);
+    const Vec3f w = -y.n;  // from z towards the environment
+    if (!sidesAgree(w, z.n, z.ns)) return Spectrum(0.0f);
+    Frame fz(z.ns);
+    Spectrum f =
+        scene_.bsdfAt(z.shape, z.uv).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
+    if (isBlack(f)) return Spectrum(0.0f);
+    ++rays_;
+    if (!scene_.escapes(z.p, z.n, w)) return Spectrum(0.0f);
+    return z.beta * f * y.beta * absDot(z.ns, w);
+  }
   if (t == 1) {  // light tracing: connect to the camera (its lens point) and splat there
     const Camera& camera = scene_.camera();
     const Vec3f& lens = cameraPath[0].p;
@@ -228,6 +287,7 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     // kept from sampling and densities recomputed at a connection differ by rounding, and where
     // strategies tie (everywhere in a spherical furnace) that rounding would give a path two
     // winners or none. So every strategy recomputes all densities from the vertices alone.
+    if (n == 2 && atInfinity(at(0))) return s == 0 ? 1.0 : 0.0;  // the camera sees infinity
     for (int i = 0; i < n; ++i) vertexStore[i] = &at(i);
     pathDensities(scene_, vertexStore.data(), n, pL, pE, delta);
     return maximumHeuristicStrategy(pL, pE, delta, n) == s ? 1.0 : 0.0;
@@ -245,7 +305,7 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
   const PathVertex* z = t > 0 ? &cameraPath[t - 1] : nullptr;
   if (s > 0 && z) {
     // x_{s-1} sampled from the camera side: from z (whose predecessor is z_{t-2}).
-    Vec3f w = directionTo(z->p, y->p);
+    Vec3f w = directionBetween(*z, *y);
     if (t == 1) {
       pE[s - 1] = toAreaDensity(scene_.camera().importance(z->p, w), z->p, *y);
     } else {
@@ -261,7 +321,14 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     }
   }
   if (t > 0) {
-    if (s == 0) {
+    if (s == 0 && atInfinity(*z)) {
+      // z is the environment: its direction's density as a light-subpath start, and the disk's
+      // density projected onto z_{t-2}.
+      pL[0] = scene_.lightPickPdf(z->light) * scene_.environment()->pdf(-z->n);
+      if (t > 1) {
+        pL[1] = scene_.environmentDiskDensity() * absDot(cameraPath[t - 2].n, z->n);
+      }
+    } else if (s == 0) {
       // z lies on a light: its density as a light-subpath start, and the emission towards z_{t-2}.
       pL[0] = scene_.lightPickPdf(z->light) / scene_.lights()[z->light].area;
       if (t > 1) {
@@ -270,15 +337,18 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
         pL[1] = toAreaDensity(cosineHemispherePdf(dot(z->n, w)), z->p, zPrev);
       }
     } else {
-      Vec3f w = directionTo(y->p, z->p);
+      Vec3f w = directionBetween(*y, *z);
       float pdf;
-      if (s == 1) {
+      if (s == 1 && atInfinity(*y)) {
+        pdf = 0;  // not used: the disk's density, projected, is z's
+      } else if (s == 1) {
         pdf = cosineHemispherePdf(dot(y->n, w));
       } else {
         Frame fy(y->ns);
         pdf = scene_.bsdfAt(y->shape, y->uv).pdf(fy.toLocal(y->wo), fy.toLocal(w));
       }
-      pL[s] = toAreaDensity(pdf, y->p, *z);
+      pL[s] = atInfinity(*y) ? scene_.environmentDiskDensity() * absDot(z->n, y->n)
+                             : toAreaDensity(pdf, y->p, *z);
       if (t > 1) {  // z_{t-2} sampled from z, arriving from y
         const PathVertex& zPrev = cameraPath[t - 2];
         Frame fz(z->ns);
@@ -291,9 +361,12 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
   double sum = 1;
   double r = 1;
   const bool power = heuristic_ == MisHeuristic::Power;
+  // No strategy connects the environment to the camera directly (light tracing of a path of one
+  // edge from infinity): its direction reaches a point-like lens with probability zero.
+  const bool cameraSeesInfinity = n == 2 && atInfinity(at(0));
   for (int i = s; i <= n - 2; ++i) {  // strategies with more light vertices (j = i + 1)
     r *= remap(pL[i]) / remap(pE[i]);
-    if (delta[i] || delta[i + 1]) continue;
+    if (delta[i] || delta[i + 1] || cameraSeesInfinity) continue;
     sum += power ? r * r : r;
   }
   r = 1;

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "common/math/statistics.h"
+#include "common/render/image_agreement.h"
 #include "common/render/local_render.h"
 #include "common/scene/scene.h"
 #include "common/scene/test_scenes.h"
@@ -16,27 +17,6 @@
 
 namespace farm {
 namespace {
-
-struct PixelStats {
-  double mean[3] = {0, 0, 0};
-  double stdError[3] = {0, 0, 0};
-};
-
-PixelStats pixelStats(const Image& img) {
-  PixelStats st;
-  const size_t n = size_t(img.width) * img.height;
-  for (int c = 0; c < 3; ++c) {
-    double s = 0, s2 = 0;
-    for (size_t i = 0; i < n; ++i) {
-      double v = img.rgb[3 * i + c];
-      s += v;
-      s2 += v * v;
-    }
-    st.mean[c] = s / n;
-    st.stdError[c] = std::sqrt(std::max(0.0, s2 / n - st.mean[c] * st.mean[c]) / n);
-  }
-  return st;
-}
 
 void expectFurnace(Algorithm algorithm, int maxDepth) {
   const float albedo = 0.6f;

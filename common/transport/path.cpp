@@ -86,10 +86,21 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
   }
 
   ScaledProduct f;
+  // The unit direction between two vertices and their squared distance; an edge from the
+  // environment has no distance (nor a sender's cosine): its x_0 is measured by direction, so
+  // that G(x_0, x_1) is x_1's cosine alone.
   auto direction = [&](int from, int to, double* d2) {
-    Vec3f d = vertices[size_t(to)].p - vertices[size_t(from)].p;
+    const PathVertex &a = vertices[size_t(from)], &b = vertices[size_t(to)];
+    if (atInfinity(a) || atInfinity(b)) {
+      *d2 = 1;
+      return directionBetween(a, b);
+    }
+    Vec3f d = b.p - a.p;
     *d2 = double(lengthSquared(d));
     return d / std::sqrt(float(*d2));
+  };
+  auto senderCosine = [&](const PathVertex& sender, const Vec3f& w) {
+    return atInfinity(sender) ? 1.0 : double(absDot(sender.n, w));
   };
   // Emission towards x_1.
   double d2;
@@ -101,7 +112,7 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
     const PathVertex& sender = vertices[size_t(i)];
     const PathVertex& v = vertices[size_t(i + 1)];
     w = direction(i, i + 1, &d2);
-    f.multiply(double(absDot(sender.n, w)) / d2);
+    f.multiply(senderCosine(sender, w) / d2);
     double d2Next;
     const Vec3f wo = direction(i + 1, i + 2, &d2Next);  // towards the camera
     const Vec3f wi = -w;                                // towards the light
@@ -129,7 +140,7 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
   const Camera& cam = scene.camera();
   const Vec3f& lens = vertices[size_t(k)].p;
   if (!cam.project(lens, -w, &out.film)) return out;
-  f.multiply(double(cam.importance(lens, -w)) * double(absDot(last.n, w)) / d2 *
+  f.multiply(double(cam.importance(lens, -w)) * senderCosine(last, w) / d2 *
              double(cam.pixelCount()));
   if (!f.finish(&out)) out.logLuminance = -INFINITY;
   return out;

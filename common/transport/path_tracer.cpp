@@ -33,7 +33,29 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
   for (int depth = 1;; ++depth) {
     SurfaceHit hit;
     ++rays_;
-    if (!scene_.intersect(ray, &hit)) break;
+    if (!scene_.intersect(ray, &hit)) {
+      const int environment = scene_.environmentLight();
+      if (environment < 0) break;
+      // The ray leaves the scene: the environment's radiance from its direction.
+      if (vertices) {
+        PathVertex v;
+        v.kind = PathVertex::Kind::Light;
+        v.n = v.ns = -ray.d;
+        v.p = ray.o + ray.d * (4 * scene_.extent() + length(ray.o - scene_.center()));
+        v.light = environment;
+        vertices->push_back(v);
+      }
+      Spectrum Le = scene_.environment()->radiance(ray.d);
+      if (!isBlack(Le)) {
+        if (previousDelta) {
+          add(beta * Le, nullptr);
+        } else {
+          float pdfLight = scene_.lightPickPdf(environment) * scene_.environment()->pdf(ray.d);
+          add(beta * Le * powerHeuristic(previousPdf, pdfLight), nullptr);
+        }
+      }
+      break;
+    }
     const int light = scene_.lightOf(hit.shape);
     if (vertices) {
       PathVertex v;
@@ -72,30 +94,57 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     if (!bsdf.isDelta() && depth + 1 <= maxDepth_ && !scene_.lights().empty()) {
       float pickPdf;
       int l = scene_.pickLight(uLight[0], &pickPdf);
-      Vec3f pl, nl;
-      scene_.sampleLightPoint(l, &uLight[1], &pl, &nl);
-      Vec3f d = pl - hit.p;
-      float d2 = lengthSquared(d);
-      if (d2 > 0) {
-        Vec3f wiW = d / std::sqrt(d2);
-        Spectrum Le = scene_.emitted(l, nl, -wiW);
-        float cosL = absDot(nl, wiW);
-        Vec3f wi = frame.toLocal(wiW);
-        Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
-        if (!isBlack(Le) && !isBlack(f) && cosL > 0 && sidesAgree(wiW, hit.ng, hit.ns)) {
-          float pdfLight = pickPdf / scene_.lights()[l].area * d2 / cosL;
-          ++rays_;
-          if (scene_.visible(hit.p, hit.ng, pl, nl)) {
-            float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
-            PathVertex lightVertex;
-            if (vertices) {
-              lightVertex.kind = PathVertex::Kind::Light;
-              lightVertex.p = pl;
-              lightVertex.n = lightVertex.ns = nl;
-              lightVertex.shape = scene_.lights()[l].shape;
-              lightVertex.light = l;
+      if (l == scene_.environmentLight()) {
+        // A direction of the environment, by its importance; unblocked, it reaches it.
+        float pdfDir;
+        const Vec3f wiW = scene_.environment()->sample({uLight[1], uLight[2]}, &pdfDir);
+        const Vec3f wi = frame.toLocal(wiW);
+        if (pdfDir > 0 && sidesAgree(wiW, hit.ng, hit.ns)) {
+          const Spectrum Le = scene_.environment()->radiance(wiW);
+          const Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
+          const float pdfLight = pickPdf * pdfDir;
+          if (!isBlack(Le) && !isBlack(f)) {
+            ++rays_;
+            if (scene_.escapes(hit.p, hit.ng, wiW)) {
+              PathVertex lightVertex;
+              if (vertices) {
+                lightVertex.kind = PathVertex::Kind::Light;
+                lightVertex.n = lightVertex.ns = -wiW;
+                lightVertex.p =
+                    hit.p + wiW * (4 * scene_.extent() + length(hit.p - scene_.center()));
+                lightVertex.light = l;
+              }
+              float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
+              add(beta * f * Le * (std::fabs(wi.z) * w / pdfLight), &lightVertex);
             }
-            add(beta * f * Le * (std::fabs(wi.z) * w / pdfLight), &lightVertex);
+          }
+        }
+      } else {
+        Vec3f pl, nl;
+        scene_.sampleLightPoint(l, &uLight[1], &pl, &nl);
+        Vec3f d = pl - hit.p;
+        float d2 = lengthSquared(d);
+        if (d2 > 0) {
+          Vec3f wiW = d / std::sqrt(d2);
+          Spectrum Le = scene_.emitted(l, nl, -wiW);
+          float cosL = absDot(nl, wiW);
+          Vec3f wi = frame.toLocal(wiW);
+          Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
+          if (!isBlack(Le) && !isBlack(f) && cosL > 0 && sidesAgree(wiW, hit.ng, hit.ns)) {
+            float pdfLight = pickPdf / scene_.lights()[l].area * d2 / cosL;
+            ++rays_;
+            if (scene_.visible(hit.p, hit.ng, pl, nl)) {
+              float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
+              PathVertex lightVertex;
+              if (vertices) {
+                lightVertex.kind = PathVertex::Kind::Light;
+                lightVertex.p = pl;
+                lightVertex.n = lightVertex.ns = nl;
+                lightVertex.shape = scene_.lights()[l].shape;
+                lightVertex.light = l;
+              }
+              add(beta * f * Le * (std::fabs(wi.z) * w / pdfLight), &lightVertex);
+            }
           }
         }
       }

@@ -17,16 +17,16 @@ double toAreaDensity(double pdfSolidAngle, const Vec3f& from, const Vec3f& to, c
 
 namespace {
 
-// Solid-angle density of leaving surface vertex v towards `to`, having arrived from `from`.
-// For a Dirac BSDF, the coefficient of the delta function: the probability of the lobe that does
-// it (zero when none does), with the delta taken, as in Path::contribution, in the direction
-// towards the light. Sampling from the light side puts it in the other direction: the lobe's
-// solid-angle ratio converts it.
-double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& from, const Vec3f& to,
+// Solid-angle density of leaving surface vertex v in direction wTo, having arrived from
+// direction wFrom (both unit, pointing away from v). For a Dirac BSDF, the coefficient of the
+// delta function: the probability of the lobe that does it (zero when none does), with the
+// delta taken, as in Path::contribution, in the direction towards the light. Sampling from the
+// light side puts it in the other direction: the lobe's solid-angle ratio converts it.
+double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& wFrom, const Vec3f& wTo,
                   bool fromLightSide) {
   Frame frame(v.ns);
-  Vec3f wo = frame.toLocal(normalize(from - v.p));
-  Vec3f wi = frame.toLocal(normalize(to - v.p));
+  Vec3f wo = frame.toLocal(wFrom);
+  Vec3f wi = frame.toLocal(wTo);
   const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
   if (!bsdf.isDelta()) return bsdf.pdf(wo, wi);
   bool reflection;
@@ -35,6 +35,13 @@ double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& from, co
   if (!bsdf.specularLobe(wo, wi, TransportMode::Radiance, &reflection, &probability, &value))
     return 0;
   return fromLightSide ? double(probability) * bsdf.diracJacobian(wo, wi) : double(probability);
+}
+
+// A solid-angle density at `from` in the direction of `to`, as a density of `to`: in area
+// measure, except at infinity, where densities stay solid-angle ones.
+double densityAt(double pdfSolidAngle, const PathVertex& from, const PathVertex& to) {
+  if (atInfinity(to)) return pdfSolidAngle;
+  return toAreaDensity(pdfSolidAngle, from.p, to.p, to.n);
 }
 
 }  // namespace
@@ -50,26 +57,32 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
   // From the light side: x_0 by light selection and uniform area sampling, x_1 by cosine
   // emission, the rest by BSDF sampling at their predecessor.
   const PathVertex& x0 = *x[0];
-  if (x0.light >= 0) {
+  if (atInfinity(x0)) {
+    // The environment: its direction's density, then the disk's projected onto x_1.
+    const EnvironmentLight* environment = scene.environment();
+    pL[0] = environment ? double(scene.lightPickPdf(x0.light)) * environment->pdf(-x0.n) : 0.0;
+    if (n > 2) pL[1] = double(scene.environmentDiskDensity()) * double(absDot(x[1]->n, x0.n));
+  } else if (x0.light >= 0) {
     pL[0] = double(scene.lightPickPdf(x0.light)) / double(scene.lights()[x0.light].area);
     Vec3f w = normalize(x[1]->p - x0.p);
     pL[1] = toAreaDensity(cosineHemispherePdf(dot(x0.n, w)), x0.p, x[1]->p, x[1]->n);
   }
   for (int i = 2; i < n - 1; ++i) {
     const PathVertex& prev = *x[i - 1];
-    pL[i] = toAreaDensity(scatterPdf(scene, prev, x[i - 2]->p, x[i]->p, true), prev.p, x[i]->p,
-                          x[i]->n);
+    pL[i] = densityAt(scatterPdf(scene, prev, directionBetween(prev, *x[i - 2]),
+                                 directionBetween(prev, *x[i]), true),
+                      prev, *x[i]);
   }
   // From the camera side: x_{n-2} through the camera's importance (a direction density), the
   // rest by BSDF sampling at their successor. The pinhole itself has no density (pE = 0).
   const PathVertex& camera = *x[n - 1];
-  Vec3f toFirst = normalize(x[n - 2]->p - camera.p);
-  pE[n - 2] = toAreaDensity(scene.camera().importance(camera.p, toFirst), camera.p, x[n - 2]->p,
-                            x[n - 2]->n);
+  pE[n - 2] = densityAt(scene.camera().importance(camera.p, directionBetween(camera, *x[n - 2])),
+                        camera, *x[n - 2]);
   for (int i = n - 3; i >= 0; --i) {
     const PathVertex& next = *x[i + 1];
-    pE[i] = toAreaDensity(scatterPdf(scene, next, x[i + 2]->p, x[i]->p, false), next.p, x[i]->p,
-                          x[i]->n);
+    pE[i] = densityAt(scatterPdf(scene, next, directionBetween(next, *x[i + 2]),
+                                 directionBetween(next, *x[i]), false),
+                      next, *x[i]);
   }
 }
 

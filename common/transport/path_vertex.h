@@ -13,7 +13,7 @@ struct PathVertex {
   enum class Kind : uint8_t { Camera, Light, Surface };
   Kind kind = Kind::Surface;
   Vec3f p;
-  Vec3f n;   // geometric normal; zero for the (pinhole) camera
+  Vec3f n;   // geometric normal; zero for the (pinhole) camera; at infinity, see atInfinity
   Vec3f ns;  // shading normal (the BSDF's frame); n for lights, zero for the camera
   Vec3f wo;  // unit direction to the previous vertex of its own subpath
   Vec2f uv;  // texture coordinates, where the BSDF is looked up (Scene::bsdfAt)
@@ -24,6 +24,22 @@ struct PathVertex {
   float pdfRev = 0;    // area density of this vertex, sampled from the other side
   bool delta = false;  // scattered by a Dirac lobe here
 };
+
+// A vertex on the environment: a light vertex without a shape, at infinity. Its n is the unit
+// direction its light travels in (into the scene), p a point far along the other way (never
+// used for directions: see directionBetween), and its densities are solid-angle densities of
+// that direction, from either side; the vertex after it, sampled from its side, has the area
+// density of the environment's disk times that vertex's cosine (Scene::environmentDiskDensity).
+inline bool atInfinity(const PathVertex& v) {
+  return v.kind == PathVertex::Kind::Light && v.shape < 0;
+}
+
+// The unit direction from a to b, either of which may lie at infinity.
+inline Vec3f directionBetween(const PathVertex& a, const PathVertex& b) {
+  if (atInfinity(a)) return a.n;
+  if (atInfinity(b)) return -b.n;
+  return normalize(b.p - a.p);
+}
 
 // Converts a solid-angle density at `from` towards `to` into an area density at `to` (the
 // geometric normal's cosine over the squared distance; 1 / d^2 at the normal-less camera).

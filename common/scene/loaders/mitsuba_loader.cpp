@@ -164,11 +164,7 @@ class MitsubaLoader {
       } else if (tag == "shape") {
         parseShape(child);
       } else if (tag == "emitter") {
-        std::string type = child.attribute("type").as_string();
-        if (type == "area")
-          fail(child, "an area <emitter> must be nested in the <shape> that emits");
-        fail(child,
-             "unsupported emitter type '" + type + "' (only area emitters nested in shapes)");
+        parseEnvironmentEmitter(child);
       } else {
         failUnknownElement(child);
       }
@@ -872,6 +868,42 @@ class MitsubaLoader {
     props.take("samplingWeight");  // light selection is the farm's own business
     rejectUnused(props, "emitter type 'area'");
     return radiance;
+  }
+
+  // <emitter type="constant"> and <emitter type="envmap"> at the top level: the environment.
+  void parseEnvironmentEmitter(const pugi::xml_node& node) {
+    std::string type = node.attribute("type").as_string();
+    if (type == "area") fail(node, "an area <emitter> must be nested in the <shape> that emits");
+    if (type != "constant" && type != "envmap")
+      fail(node, "unsupported emitter type '" + type +
+                     "' (area emitters nested in shapes, constant and envmap)");
+    if (scene_.environment.present)
+      fail(node, "more than one environment emitter (constant or envmap)");
+    PropertySet props = collectProperties(node, nullptr);
+    props.take("samplingWeight");  // light selection is the farm's own business
+    Spectrum scale(1.0f);
+    std::string filename;
+    Matrix4 toWorld = Matrix4::identity();
+    if (type == "constant") {
+      scale = getSpectrum(props, "radiance", Spectrum(1.0f));
+    } else {
+      pugi::xml_node where;
+      filename = getString(props, "filename", "", &where);
+      if (filename.empty()) fail(node, "envmap has no filename");
+      scale = getSpectrum(props, "scale", Spectrum(1.0f));
+      if (pugi::xml_node t = props.take("toWorld")) toWorld = transformOf(t);
+      props.take("cache");  // Mitsuba's MIP map cache: nothing to cache here
+    }
+    rejectUnused(props, "emitter type '" + type + "'");
+    // Mitsuba's lat-long frame has y up and u = atan2(x, -z) / 2 pi; the description's is
+    // pbrt's (z up, u = atan2(y, x) / 2 pi): local Mitsuba (x, y, z) = (y', z', -x') of pbrt's.
+    Matrix4 mitsubaFromPbrt;
+    mitsubaFromPbrt.m[0] = {0, 1, 0, 0};
+    mitsubaFromPbrt.m[1] = {0, 0, 1, 0};
+    mitsubaFromPbrt.m[2] = {-1, 0, 0, 0};
+    mitsubaFromPbrt.m[3] = {0, 0, 0, 1};
+    scene_.environment =
+        makeEnvironment(dir_, path_, lineOf(node), scale, toWorld * mitsubaFromPbrt, filename);
   }
 
   void parseShape(const pugi::xml_node& node) {

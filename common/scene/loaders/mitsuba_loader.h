@@ -4,8 +4,9 @@
 // Supported: <integrator> (maxDepth only), one perspective or thinlens <sensor> with <film> and
 // <rfilter> (tent, box, gaussian), <bsdf> diffuse / twosided / dielectric / roughconductor
 // (declared at top level with an id and used through <ref>, or inline in a shape), <shape>
-// rectangle / cube / sphere / obj with an optional area <emitter>, and <transform> built from
-// matrix, translate, scale, rotate, lookat. Anything else that would change the picture is an error
+// rectangle / cube / sphere / obj / ply with an optional area <emitter>, one constant or envmap
+// <emitter> (the environment), and <transform> built from matrix, translate, scale, rotate,
+// lookat. Anything else that would change the picture is an error
 // rather than silently ignored: a render that quietly differs from the scene is worse than one that
 // refuses to start.
 #include <string>

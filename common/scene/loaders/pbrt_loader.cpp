@@ -483,8 +483,8 @@ class PbrtLoader {
       inWorld(d);
       parseShape(d);
     } else if (n == "LightSource") {
-      fail(d, "light source '" + d.strings[0] +
-                  "' is not supported yet (area lights only: AreaLightSource \"diffuse\")");
+      inWorld(d);
+      parseLightSource(d);
     } else if (n == "MakeNamedMedium" || n == "MediumInterface") {
       fail(d, n + ": participating media are not supported");
     } else if (n == "ObjectBegin") {
@@ -1095,6 +1095,30 @@ class PbrtLoader {
     rejectUnused(d, "area light");
     attrs_.areaLight.radiance = L * float(scale);
     attrs_.areaLight.active = true;
+  }
+
+  // LightSource "infinite": the environment, constant or a lat-long image (v3's "mapname",
+  // v4's "filename"), in the light's coordinate system (z up).
+  void parseLightSource(Directive& d) {
+    if (d.strings[0] != "infinite")
+      fail(d, "light source '" + d.strings[0] +
+                  "' is not supported yet (AreaLightSource \"diffuse\" and LightSource "
+                  "\"infinite\")");
+    if (scene_.environment.present) fail(d, "more than one infinite light");
+    if (inObject_) fail(d, "a light source inside an object definition");
+    Spectrum L(1.0f), scale(1.0f);
+    getSpectrum(d, "L", &L);
+    getSpectrum(d, "scale", &scale);
+    std::string filename = getString(d, "filename", "");
+    const std::string mapname = getString(d, "mapname", "");
+    if (!filename.empty() && !mapname.empty()) fail(d, "both \"filename\" and \"mapname\" given");
+    if (filename.empty()) filename = mapname;
+    if (d.params.has("illuminance")) fail(d, "infinite light 'illuminance' is not supported");
+    if (d.params.has("portal")) fail(d, "infinite light portals are not supported");
+    getInt(d, "nsamples", 1);  // v3's sample count: the farm samples its own way
+    getInt(d, "samples", 1);
+    rejectUnused(d, "infinite light");
+    scene_.environment = makeEnvironment(dir_, d.file, d.line, L * scale, attrs_.ctm, filename);
   }
 
   // ---- Shapes ----

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/scene/loaders/image_reader.h"
 #include "common/scene/mesh_cleanup.h"
 
 namespace farm {
@@ -165,6 +166,46 @@ double determinant3(const Matrix4& t) {
   return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
          m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
          m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+}  // namespace farm
+
+namespace farm {
+
+EnvironmentDescription makeEnvironment(const fs::path& dir, const std::string& file, int line,
+                                       const Spectrum& scale, const Matrix4& lightToWorld,
+                                       const std::string& filename) {
+  EnvironmentDescription e;
+  e.present = true;
+  e.origin = fs::path(file).filename().string() + ":" + std::to_string(line) + " (environment" +
+             (filename.empty() ? "" : " " + filename) + ")";
+  if (!isFinite(scale) || !(scale.x >= 0 && scale.y >= 0 && scale.z >= 0))
+    throw SceneLoadError(file, line, "environment radiance must be finite and >= 0");
+  e.scale = scale;
+  double unused;
+  if (!lightToWorld.isFinite() || similarityOf(lightToWorld, &unused) != Similarity::Uniform)
+    throw SceneLoadError(file, line,
+                         "the environment's transformation must be a rotation (a non-uniform "
+                         "scale or a shear would distort its directions)");
+  e.toWorld = lightToWorld;
+  if (filename.empty()) return e;
+  const fs::path path = sceneFilePath(dir, filename, "environment map", file, line);
+  const std::string bytes = readSceneFile(path, "environment map '" + filename + "'", file, line);
+  std::shared_ptr<TextureImage> image;
+  try {
+    image = readTextureImage(bytes, filename, TextureEncoding::Automatic);
+  } catch (const std::exception& x) {
+    throw SceneLoadError(file, line, "cannot read environment map '" + filename + "': " + x.what());
+  }
+  if (image->width != 2 * image->height)
+    throw SceneLoadError(
+        file, line,
+        "environment map '" + filename + "' is " + std::to_string(image->width) + "x" +
+            std::to_string(image->height) +
+            ": only lat-long maps (twice as wide as high) are supported" +
+            (image->width == image->height ? " (pbrt-v4's square equal-area maps are not)" : ""));
+  e.image = std::move(image);
+  return e;
 }
 
 }  // namespace farm

@@ -1,0 +1,236 @@
+// Environment lights through every algorithm that takes them. Analytic: under a constant sky of
+// radiance Le, diffuse surfaces of albedo 1 have radiance Le everywhere whatever their shape
+// (the white furnace: L = Le solves the rendering equation), and a lone convex diffuse sphere
+// of albedo rho has rho Le (each of its points sees only sky). Under an image sky, path tracing,
+// BDPT and the chains agree within their variance. Tolerances come from the estimators' own
+// spread (furnace_test.cpp explains the pixel statistics; image_agreement.h the comparison).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "common/render/image_agreement.h"
+#include "common/render/local_render.h"
+#include "common/scene/loaders/scene_files.h"
+#include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
+
+namespace farm {
+namespace {
+
+const Spectrum kSky(1.0f, 0.5f, 2.0f);
+
+ShapeDescription sphere(const Vec3f& center, float radius, int bsdf) {
+  ShapeDescription s;
+  s.type = ShapeDescription::Type::Sphere;
+  s.center = center;
+  s.radius = radius;
+  s.bsdf = bsdf;
+  return s;
+}
+
+// A camera at the origin looking down +z (or -z, at nothing but sky) at a large sphere that
+// fills its view, and optionally a small one in front of it that the two reflect between.
+SceneDescription skyFurnace(float albedo, bool smallSphere, bool lookAway = false) {
+  SceneDescription d;
+  d.camera.toWorld = lookAway ? Matrix4::rotate(Vec3f(0, 1, 0), 180) : Matrix4::identity();
+  d.camera.fovDegrees = 60;
+  d.camera.width = d.camera.height = 24;
+  BsdfDescription b;
+  b.reflectance = Spectrum(albedo);
+  d.bsdfs.push_back(b);
+  d.shapes.push_back(sphere(Vec3f(0, 0, 6), 4.5f, 0));  // 48.6 degrees wide: the whole view
+  if (smallSphere) d.shapes.push_back(sphere(Vec3f(0.3f, 0.2f, 1.1f), 0.25f, 0));
+  d.environment.present = true;
+  d.environment.scale = kSky;
+  return d;
+}
+
+void expectUniformImage(Algorithm algorithm, const SceneDescription& desc, float factor,
+                        const char* what) {
+  RenderSettings settings;
+  settings.algorithm = algorithm;
+  settings.samplesPerPixel = 64;
+  settings.mutationsPerPixel = 64;
+  settings.seed = 17;
+  settings.bootstrapSamples = 1 << 15;
+  RenderJob job(std::make_shared<Scene>(desc), settings, "sky");
+  LocalRenderResult r = renderLocally(job);
+  const PixelStats st = pixelStats(r.image);
+  for (int c = 0; c < 3; ++c) {
+    const double expected = double(kSky[c]) * factor;
+    double se = st.stdError[c];
+    if (isMarkovChain(algorithm)) {  // the image scales with Z
+      const double zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+      se = std::hypot(se, expected * zRel);
+    }
+    EXPECT_NEAR(st.mean[c], expected, 4 * se + 1e-6 * expected)
+        << algorithmName(algorithm) << " " << what << " channel " << c;
+  }
+  EXPECT_EQ(r.rejected.total(), 0);
+}
+
+void expectSkyFurnaces(Algorithm algorithm) {
+  expectUniformImage(algorithm, skyFurnace(1.0f, true), 1.0f, "white furnace of two spheres");
+  expectUniformImage(algorithm, skyFurnace(0.6f, false), 0.6f, "lone sphere of albedo 0.6");
+  expectUniformImage(algorithm, skyFurnace(0.6f, false, true), 1.0f, "the sky seen directly");
+}
+
+TEST(Environment, ConstantSkyPathTracing) {
+  expectSkyFurnaces(Algorithm::PathTracing);
+}
+TEST(Environment, ConstantSkyBidirectional) {
+  expectSkyFurnaces(Algorithm::Bidirectional);
+}
+TEST(Environment, ConstantSkyPssmlt) {
+  expectSkyFurnaces(Algorithm::PSSMLT);
+}
+TEST(Environment, ConstantSkyPssmltOverPathTracing) {
+  expectSkyFurnaces(Algorithm::PSSMLTOverPT);
+}
+TEST(Environment, ConstantSkyMultiplexed) {
+  expectSkyFurnaces(Algorithm::MMLT);
+}
+
+// A diffuse floor, a glossy (plastic) ball and a diffuse one on it, under the image sky with its
+// sun behind the camera's left; the camera sees floor, balls and sky.
+SceneDescription imageSkyScene() {
+  SceneDescription d;
+  d.camera.toWorld = Matrix4::lookAt(Vec3f(0, 1.2f, -1), Vec3f(0, 0.2f, 3), Vec3f(0, 1, 0));
+  d.camera.fovDegrees = 70;
+  d.camera.width = 32;
+  d.camera.height = 24;
+  BsdfDescription floor;
+  floor.reflectance = Spectrum(0.5f, 0.45f, 0.4f);
+  floor.twoSided = true;
+  d.bsdfs.push_back(floor);
+  BsdfDescription plastic;
+  plastic.type = BsdfDescription::Type::Plastic;
+  plastic.reflectance = Spectrum(0.2f, 0.3f, 0.6f);
+  plastic.distribution = MicrofacetDistribution::GGX;
+  plastic.alpha = 0.15f;
+  plastic.intIOR = 1.5f;
+  plastic.extIOR = 1.0f;
+  d.bsdfs.push_back(plastic);
+  ShapeDescription ground;
+  ground.positions = {{-4, 0, -2}, {4, 0, -2}, {4, 0, 8}, {-4, 0, 8}};
+  ground.indices = {0, 2, 1, 0, 3, 2};
+  ground.bsdf = 0;
+  d.shapes.push_back(ground);
+  d.shapes.push_back(sphere(Vec3f(-0.5f, 0.6f, 3), 0.6f, 1));
+  d.shapes.push_back(sphere(Vec3f(0.9f, 0.4f, 2.4f), 0.4f, 0));
+  d.environment.present = true;
+  d.environment.image = latLongSky(40);
+  d.environment.toWorld = Matrix4::rotate(Vec3f(1, 0, 0), -90);  // the map's z up is world y
+  d.maxDepth = 6;
+  return d;
+}
+
+Image renderSky(Algorithm algorithm, int64_t budget, uint64_t seed, double* zRel = nullptr) {
+  RenderSettings s;
+  s.algorithm = algorithm;
+  s.samplesPerPixel = budget;
+  s.mutationsPerPixel = budget;
+  s.seed = seed;
+  RenderJob job(std::make_shared<Scene>(imageSkyScene()), s, "image-sky");
+  LocalRenderResult r = renderLocally(job);
+  EXPECT_EQ(r.rejected.total(), 0);
+  if (zRel) *zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+  return r.image;
+}
+
+TEST(Environment, ImageSkyPathTracingAndBidirectionalAgree) {
+  Image pt[2] = {renderSky(Algorithm::PathTracing, 256, 1),
+                 renderSky(Algorithm::PathTracing, 256, 2)};
+  Image bd[2] = {renderSky(Algorithm::Bidirectional, 64, 3),
+                 renderSky(Algorithm::Bidirectional, 64, 4)};
+  const Agreement g = compare(pt, bd);
+  EXPECT_GT(g.meanA, 0.05);
+  EXPECT_NEAR(g.meanA, g.meanB, 4 * g.se);
+  EXPECT_LT(g.ratio, 1.3);
+  std::printf(
+      "image sky: means pt %.4f bdpt %.4f (se %.4f), squared differences over "
+      "variance %.3f\n",
+      g.meanA, g.meanB, g.se, g.ratio);
+}
+
+void expectChainAgreesWithPathTracing(Algorithm algorithm) {
+  Image pt[2] = {renderSky(Algorithm::PathTracing, 256, 11),
+                 renderSky(Algorithm::PathTracing, 256, 12)};
+  double z[2];
+  Image chain[2] = {renderSky(algorithm, 128, 13, &z[0]), renderSky(algorithm, 128, 14, &z[1])};
+  const Agreement g = compare(pt, chain, 0.5 * std::hypot(z[0], z[1]));
+  EXPECT_NEAR(g.meanA, g.meanB, 4 * g.se) << algorithmName(algorithm);
+  EXPECT_LT(g.ratio, 1.5) << algorithmName(algorithm);
+  std::printf(
+      "image sky %s: means pt %.4f chain %.4f (se %.4f), squared differences over "
+      "variance %.3f\n",
+      algorithmName(algorithm), g.meanA, g.meanB, g.se, g.ratio);
+}
+
+TEST(Environment, ImageSkyPssmltAgreesWithPathTracing) {
+  expectChainAgreesWithPathTracing(Algorithm::PSSMLT);
+}
+TEST(Environment, ImageSkyPssmltOverPathTracingAgreesWithPathTracing) {
+  expectChainAgreesWithPathTracing(Algorithm::PSSMLTOverPT);
+}
+TEST(Environment, ImageSkyMultiplexedAgreesWithPathTracing) {
+  expectChainAgreesWithPathTracing(Algorithm::MMLT);
+}
+
+// The scene file's sky (tests/data/sky) through the loader and a whole render: the top rows
+// see the blue sky, the bottom rows the floor under it; a map upside down or turned about the
+// wrong axis would put its brown ground at the top.
+TEST(Environment, SceneFileSkyIsAboveTheHorizon) {
+  RenderSettings settings;
+  settings.algorithm = Algorithm::Bidirectional;
+  settings.samplesPerPixel = 16;
+  settings.seed = 5;
+  const std::string path = std::string(FARM_TEST_DATA_DIR) + "/sky/scene.pbrt";
+  RenderJob job(loadScene(path, settings), settings, "sky");
+  const Image image = renderLocally(job).image;
+  ASSERT_EQ(image.width, 48);
+  auto blueOverRed = [&](int y0, int y1) {
+    double r = 0, b = 0;
+    for (int y = y0; y < y1; ++y) {
+      for (int x = 0; x < image.width; ++x) {
+        r += image.rgb[3 * (size_t(y) * image.width + x)];
+        b += image.rgb[3 * (size_t(y) * image.width + x) + 2];
+      }
+    }
+    return b / r;
+  };
+  const double top = blueOverRed(0, 4), bottom = blueOverRed(image.height - 4, image.height);
+  std::printf("sky scene: blue over red %.2f in the top rows, %.2f in the bottom ones\n", top,
+              bottom);
+  EXPECT_GT(top, 1.8);  // the map's sky near the horizon: 0.9 / 0.5
+  EXPECT_LT(bottom, 1.5);
+}
+
+TEST(Environment, PathSpaceChainsRefuseIt) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "farm_environment_refused.pbrt").string();
+  std::ofstream(path) << "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\n"
+                         "WorldBegin\nShape \"sphere\"\nLightSource \"infinite\"\n";
+  for (Algorithm algorithm : {Algorithm::MLT, Algorithm::ERPT}) {
+    RenderSettings settings;
+    settings.algorithm = algorithm;
+    try {
+      loadScene(path, settings);
+      ADD_FAILURE() << algorithmName(algorithm) << " accepted an environment light";
+    } catch (const SceneLoadError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("environment light is not supported by ") +
+                                           algorithmName(algorithm)),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  RenderSettings pt;
+  EXPECT_TRUE(loadScene(path, pt)->environment());
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace farm

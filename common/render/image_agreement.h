@@ -1,0 +1,61 @@
+#pragma once
+// Test code only: whether two estimators of the same image agree, each rendered twice with
+// different seeds (the statistical tests of thin_lens_test and environment_test), and one
+// image's mean and its standard error from the spread of its pixels (furnace_test).
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include "common/film/image.h"
+
+namespace farm {
+
+// Two estimators of the same image, each rendered twice with different seeds. Over the image,
+// the squared differences of their averages are explained by their variance (each pixel's from
+// its pair): the ratio of the sums is one for unbiased estimators, and a biased one (a lens
+// point missed, a density from the lens's centre) adds its squared bias. Their means differ by
+// noise of standard error `se`, to which the second's relative error zRel (its Z's) is added.
+struct Agreement {
+  double meanA = 0, meanB = 0, se = 0, ratio = 0;
+};
+inline Agreement compare(const Image (&a)[2], const Image (&b)[2], double zRel = 0) {
+  const size_t n = a[0].rgb.size();
+  double sum[2] = {0, 0}, var = 0, squared = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double ma = 0.5 * (a[0].rgb[i] + a[1].rgb[i]), mb = 0.5 * (b[0].rgb[i] + b[1].rgb[i]);
+    const double da = a[0].rgb[i] - a[1].rgb[i], db = b[0].rgb[i] - b[1].rgb[i];
+    var += (da * da + db * db) / 4;
+    sum[0] += ma, sum[1] += mb;
+    squared += (ma - mb) * (ma - mb);
+  }
+  Agreement g;
+  g.meanA = sum[0] / double(n);
+  g.meanB = sum[1] / double(n);
+  g.se = std::hypot(std::sqrt(var) / double(n), g.meanB * zRel);
+  g.ratio = squared / var;
+  return g;
+}
+
+// The mean of each channel over the image, and its standard error taken from the pixels'
+// spread: right where pixels are independent estimates (PT, BDPT), an approximation for chains.
+struct PixelStats {
+  double mean[3] = {0, 0, 0};
+  double stdError[3] = {0, 0, 0};
+};
+inline PixelStats pixelStats(const Image& img) {
+  PixelStats st;
+  const size_t n = size_t(img.width) * img.height;
+  for (int c = 0; c < 3; ++c) {
+    double s = 0, s2 = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const double v = img.rgb[3 * i + c];
+      s += v;
+      s2 += v * v;
+    }
+    st.mean[c] = s / double(n);
+    st.stdError[c] = std::sqrt(std::max(0.0, s2 / double(n) - st.mean[c] * st.mean[c]) / double(n));
+  }
+  return st;
+}
+
+}  // namespace farm

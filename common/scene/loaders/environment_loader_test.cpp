@@ -1,0 +1,175 @@
+// Environment lights from both formats: Mitsuba's constant and envmap (y up, u = atan2(x, -z) /
+// 2 pi) and pbrt's infinite (z up, u = atan2(y, x) / 2 pi; v3's "mapname", v4's "filename"),
+// each texel of a map found where its format puts it, and their errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "common/film/image.h"
+#include "common/scene/environment_light.h"
+#include "common/scene/loaders/scene_files.h"
+#include "common/scene/loaders/scene_loader.h"
+#include "common/scene/loaders/temp_dir_for_tests.h"
+
+namespace farm {
+namespace {
+
+constexpr int kW = 8, kH = 4;
+
+// A lat-long map whose texel (x, y) is (x + 1, y + 1, 1): every texel says where it is.
+void writeMap(const TempDir& dir, const std::string& name, int w = kW, int h = kH) {
+  Image img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) img.set(x, y, {float(x + 1), float(y + 1), 1});
+  std::string error;
+  ASSERT_TRUE(writeExr((dir.path() / name).string(), img, {}, &error)) << error;
+}
+
+const char* kMitsubaHead = R"(<?xml version="1.0"?>
+<scene version="0.5.0">
+  <sensor type="perspective"><float name="fov" value="45"/>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+  </sensor>
+  <shape type="sphere"><float name="radius" value="0.5"/></shape>
+)";
+
+std::string pbrtScene(const std::string& world) {
+  return "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" [ 45 ]\n"
+         "Film \"image\" \"integer xresolution\" [ 8 ] \"integer yresolution\" [ 8 ]\n"
+         "WorldBegin\nShape \"sphere\" \"float radius\" 0.5\n" +
+         world;
+}
+
+std::string loadError(const std::string& path) {
+  try {
+    loadSceneDescription(path);
+  } catch (const SceneLoadError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Every texel's centre, as a local direction of the given frame, looked up in the world.
+template <typename LocalDirection>
+void expectEveryTexel(const EnvironmentLight& light, const Matrix4& toWorld, float scale,
+                      LocalDirection local) {
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) {
+      const float theta = kPi * (y + 0.5f) / kH, phi = 2 * kPi * (x + 0.5f) / kW;
+      const Spectrum L = light.radiance(normalize(toWorld.applyVector(local(theta, phi))));
+      EXPECT_FLOAT_EQ(L.x, scale * (x + 1)) << "texel " << x << ", " << y;
+      EXPECT_FLOAT_EQ(L.y, scale * (y + 1)) << "texel " << x << ", " << y;
+    }
+  }
+}
+
+TEST(EnvironmentLoader, MitsubaEnvmapIsYUp) {
+  TempDir dir;
+  writeMap(dir, "sky.exr");
+  const std::string path = dir.write(
+      "scene.xml", std::string(kMitsubaHead) +
+                       "  <emitter type=\"envmap\"><string name=\"filename\" value=\"sky.exr\"/>"
+                       "<float name=\"scale\" value=\"2\"/>\n"
+                       "    <transform name=\"toWorld\"><rotate x=\"1\" angle=\"30\"/></transform>"
+                       "</emitter>\n</scene>\n");
+  SceneDescription d = loadSceneDescription(path);
+  ASSERT_TRUE(d.environment.present);
+  EnvironmentLight light(d.environment);
+  // Mitsuba: local (sin theta sin phi, cos theta, -sin theta cos phi).
+  expectEveryTexel(light, Matrix4::rotate(Vec3f(1, 0, 0), 30), 2, [](float theta, float phi) {
+    return Vec3f(std::sin(theta) * std::sin(phi), std::cos(theta),
+                 -std::sin(theta) * std::cos(phi));
+  });
+}
+
+TEST(EnvironmentLoader, PbrtInfiniteIsZUpInBothVersions) {
+  for (const char* key : {"filename", "mapname"}) {
+    TempDir dir;
+    writeMap(dir, "sky.exr");
+    const std::string path =
+        dir.write("scene.pbrt", pbrtScene(std::string("AttributeBegin\nRotate 30 1 0 0\n") +
+                                          "LightSource \"infinite\" \"string " + key +
+                                          "\" \"sky.exr\" \"rgb L\" [3 3 3]\nAttributeEnd\n"));
+    SceneDescription d = loadSceneDescription(path);
+    ASSERT_TRUE(d.environment.present) << key;
+    EnvironmentLight light(d.environment);
+    // pbrt: local (sin theta cos phi, sin theta sin phi, cos theta).
+    expectEveryTexel(light, Matrix4::rotate(Vec3f(1, 0, 0), 30), 3, [](float theta, float phi) {
+      return Vec3f(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                   std::cos(theta));
+    });
+  }
+}
+
+TEST(EnvironmentLoader, ConstantEnvironments) {
+  TempDir dir;
+  const std::string xml = dir.write(
+      "scene.xml", std::string(kMitsubaHead) +
+                       "  <emitter type=\"constant\"><rgb name=\"radiance\" value=\"1 2 3\"/>"
+                       "</emitter>\n</scene>\n");
+  const std::string pbrt =
+      dir.write("scene.pbrt", pbrtScene("LightSource \"infinite\" \"rgb L\" [1 2 3]\n"));
+  for (const std::string& path : {xml, pbrt}) {
+    SceneDescription d = loadSceneDescription(path);
+    ASSERT_TRUE(d.environment.present) << path;
+    EXPECT_EQ(d.environment.image, nullptr);
+    const Spectrum L = EnvironmentLight(d.environment).radiance(normalize(Vec3f(0.3f, -1, 2)));
+    EXPECT_FLOAT_EQ(L.x, 1);
+    EXPECT_FLOAT_EQ(L.y, 2);
+    EXPECT_FLOAT_EQ(L.z, 3);
+  }
+}
+
+TEST(EnvironmentLoader, BadEnvironmentsGetAClearError) {
+  TempDir dir;
+  writeMap(dir, "square.exr", 4, 4);
+  writeMap(dir, "wide.exr", 12, 4);
+  writeMap(dir, "sky.exr");
+  struct Case {
+    std::string name, text, message;
+  };
+  const std::string envmap = "<emitter type=\"envmap\"><string name=\"filename\" value=\"";
+  const Case cases[] = {
+      {"a.pbrt", pbrtScene("LightSource \"infinite\" \"string filename\" \"square.exr\"\n"),
+       "pbrt-v4's square equal-area maps are not"},
+      {"b.pbrt", pbrtScene("LightSource \"infinite\" \"string filename\" \"wide.exr\"\n"),
+       "only lat-long maps (twice as wide as high)"},
+      {"c.pbrt", pbrtScene("LightSource \"infinite\"\nLightSource \"infinite\"\n"),
+       "more than one infinite light"},
+      {"d.pbrt", pbrtScene("Scale 1 2 1\nLightSource \"infinite\"\n"), "must be a rotation"},
+      {"e.pbrt", pbrtScene("LightSource \"infinite\" \"string filename\" \"missing.exr\"\n"),
+       "not found"},
+      {"f.pbrt", pbrtScene("LightSource \"infinite\" \"string filename\" \"../sky.exr\"\n"),
+       "outside"},
+      {"g.pbrt",
+       pbrtScene("LightSource \"infinite\" \"string filename\" \"sky.exr\" "
+                 "\"string mapname\" \"sky.exr\"\n"),
+       "both"},
+      {"h.pbrt", pbrtScene("LightSource \"spot\"\n"), "light source 'spot' is not supported"},
+      {"i.pbrt", pbrtScene("LightSource \"infinite\" \"rgb L\" [1 -1 1]\n"), "negative"},
+      {"j.pbrt", pbrtScene("LightSource \"infinite\" \"float power\" 3\n"), "power"},
+      {"k.xml",
+       std::string(kMitsubaHead) + envmap + "sky.exr\"/></emitter>\n" + envmap +
+           "sky.exr\"/></emitter>\n</scene>\n",
+       "more than one environment emitter"},
+      {"l.xml", std::string(kMitsubaHead) + "<emitter type=\"envmap\"/>\n</scene>\n",
+       "envmap has no filename"},
+      {"m.xml", std::string(kMitsubaHead) + "<emitter type=\"point\"/>\n</scene>\n",
+       "unsupported emitter type 'point'"},
+      {"n.xml",
+       std::string(kMitsubaHead) + envmap +
+           "sky.exr\"/><float name=\"gamma\" value=\"2.2\"/></emitter>\n</scene>\n",
+       "unsupported parameter 'gamma'"},
+      {"o.xml", std::string(kMitsubaHead) + envmap + "square.exr\"/></emitter>\n</scene>\n",
+       "only lat-long maps"},
+  };
+  for (const Case& c : cases) {
+    const std::string error = loadError(dir.write(c.name, c.text));
+    EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+  }
+}
+
+}  // namespace
+}  // namespace farm
