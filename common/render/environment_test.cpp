@@ -209,7 +209,7 @@ TEST(Environment, SceneFileSkyIsAboveTheHorizon) {
   EXPECT_LT(bottom, 1.5);
 }
 
-TEST(Environment, PathSpaceChainsRefuseIt) {
+TEST(Environment, PathSpaceChainsRefuseItAndPointLights) {
   const std::string path =
       (std::filesystem::temp_directory_path() / "farm_environment_refused.pbrt").string();
   std::ofstream(path) << "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\n"
@@ -221,14 +221,29 @@ TEST(Environment, PathSpaceChainsRefuseIt) {
       loadScene(path, settings);
       ADD_FAILURE() << algorithmName(algorithm) << " accepted an environment light";
     } catch (const SceneLoadError& e) {
-      EXPECT_NE(std::string(e.what()).find(std::string("environment light is not supported by ") +
-                                           algorithmName(algorithm)),
-                std::string::npos)
+      EXPECT_NE(
+          std::string(e.what()).find(std::string("an environment light is not supported by ") +
+                                     algorithmName(algorithm)),
+          std::string::npos)
           << e.what();
     }
   }
   RenderSettings pt;
   EXPECT_TRUE(loadScene(path, pt)->environment());
+  // Point lights likewise.
+  std::ofstream(path) << "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\n"
+                         "WorldBegin\nShape \"sphere\"\nLightSource \"point\"\n";
+  RenderSettings mlt;
+  mlt.algorithm = Algorithm::MLT;
+  try {
+    loadScene(path, mlt);
+    ADD_FAILURE() << "mlt accepted a point light";
+  } catch (const SceneLoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("a point or spot light is not supported by mlt"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(loadScene(path, pt)->lights().size(), 1u);
   std::filesystem::remove(path);
 }
 

@@ -336,14 +336,15 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
                              "pssmlt, pssmlt-pt or mmlt");
   }
   // Their path-space mutations build and perturb vertices on surfaces only; a path from the
-  // environment (a vertex at infinity) is not one of theirs yet.
-  if (desc.environment.present &&
+  // environment (a vertex at infinity) or from a point light is not one of theirs yet.
+  if ((desc.environment.present || !desc.pointLights.empty()) &&
       (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
-    throw SceneLoadError(path, 0,
-                         std::string("an environment light is not supported by ") +
-                             algorithmName(settings.algorithm) +
-                             " yet (its mutations do not build paths from infinity): use pt, "
-                             "bdpt, pssmlt, pssmlt-pt or mmlt");
+    throw SceneLoadError(
+        path, 0,
+        std::string(desc.environment.present ? "an environment light" : "a point or spot light") +
+            " is not supported by " + algorithmName(settings.algorithm) +
+            " yet (its mutations build paths from lights with an area only): use pt, bdpt, "
+            "pssmlt, pssmlt-pt or mmlt");
   }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);

@@ -166,6 +166,17 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
     }
   }
 
+  for (const PointLightDescription& p : desc_.pointLights) {
+    PointLight point(p);
+    if (!(point.power() > 0)) continue;  // emits nothing: sampling it would waste paths
+    AreaLight light;
+    light.point = int(pointLights_.size());
+    light.radiance = p.intensity;
+    light.power = float(point.power());
+    lights_.push_back(light);
+    pointLights_.push_back(point);
+  }
+
   double total = 0;
   for (const AreaLight& l : lights_) {
     total += double(l.power);
@@ -305,7 +316,7 @@ double Scene::lightPickProbability(int light) const {
 }
 
 double Scene::trianglePickProbability(int light, uint32_t t) const {
-  if (light < 0 || light >= int(lights_.size()) || lights_[light].isEnvironment()) return 0;
+  if (light < 0 || light >= int(lights_.size()) || lights_[light].shape < 0) return 0;
   const std::vector<double>& cdf = triangleCdf_[lights_[light].shape];
   if (cdf.empty()) return 1;  // a sphere: one primitive
   if (t >= cdf.size()) return 0;

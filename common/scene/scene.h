@@ -7,6 +7,7 @@
 #include "common/scene/bsdf.h"
 #include "common/scene/camera.h"
 #include "common/scene/environment_light.h"
+#include "common/scene/point_light.h"
 #include "common/scene/scene_description.h"
 
 namespace farm {
@@ -21,14 +22,17 @@ struct SurfaceHit {
   uint32_t primitive = 0;
 };
 
-// A light: one emitting shape, sampled uniformly by area, emitting on its normal's side; or,
-// with shape -1, the environment (Scene::environment()), whose path vertices lie at infinity.
+// A light: one emitting shape, sampled uniformly by area, emitting on its normal's side; or a
+// point light (point >= 0: Scene::pointLight()); or, with neither, the environment
+// (Scene::environment()), whose path vertices lie at infinity.
 struct AreaLight {
   int shape = -1;
+  int point = -1;  // index into the scene's point lights
   Spectrum radiance;
   float area = 0;
   float power = 0;  // luminance of radiance * area * pi: the light selection weight
-  bool isEnvironment() const { return shape < 0; }
+  bool isEnvironment() const { return shape < 0 && point < 0; }
+  bool isPoint() const { return point >= 0; }
 };
 
 // Mitsuba's strictNormals: a direction is usable at a surface only when the geometric and the
@@ -96,10 +100,13 @@ class Scene {
   double trianglePickProbability(int light, uint32_t t) const;
   // The probability with which pickLight picks a light, as its CDF makes it.
   double lightPickProbability(int light) const;
+  const PointLight& pointLight(int light) const { return pointLights_[lights_[light].point]; }
   // Radiance leaving light `light` in direction w at a point of normal n; for the environment,
-  // the radiance travelling in direction w (n is not used).
+  // the radiance travelling in direction w, and for a point light its intensity in direction w
+  // (n is not used for either).
   Spectrum emitted(int light, const Vec3f& n, const Vec3f& w) const {
     if (light == environmentLight_) return environment_->radiance(-w);
+    if (lights_[light].isPoint()) return pointLight(light).intensity(w);
     return dot(n, w) > 0 ? lights_[light].radiance : Spectrum(0.0f);
   }
 
@@ -116,6 +123,7 @@ class Scene {
   float extent_ = 1;
   Vec3f center_{0.0f};
   std::unique_ptr<EnvironmentLight> environment_;
+  std::vector<PointLight> pointLights_;
   int environmentLight_ = -1;
   void* device_ = nullptr;  // RTCDevice
   void* scene_ = nullptr;   // RTCScene

@@ -92,6 +92,23 @@ struct EnvironmentDescription {
   std::string origin;                         // "scene.xml:12 (envmap sky.exr)", for messages
 };
 
+// A point light (pbrt's point and spot, Mitsuba's point and spot): radiant intensity
+// `intensity` (power per unit solid angle) from `position`. A spot emits only within
+// cosTotalWidth of `direction`: fully inside cosFalloffStart, falling off between as its format
+// says. Point lights are invisible: a path meets one only by being connected to it.
+struct PointLightDescription {
+  Vec3f position;
+  Spectrum intensity{1.0f};
+  bool spot = false;
+  Vec3f direction{0, 0, 1};  // unit; spots only
+  float cosTotalWidth = -1, cosFalloffStart = -1;
+  // pbrt-v3: ((cos - cosTotal) / (cosStart - cosTotal))^4; pbrt-v4: smoothstep of the same;
+  // Mitsuba: linear in the angle between the beam width and the cutoff.
+  enum class Falloff { PbrtV3Quartic, PbrtV4Smoothstep, MitsubaLinearAngle };
+  Falloff falloff = Falloff::PbrtV3Quartic;
+  std::string origin;  // "scene.pbrt:12 (spot)", for messages
+};
+
 struct SceneDescription {
   std::string sourcePath;
   CameraDescription camera;
@@ -100,6 +117,7 @@ struct SceneDescription {
   std::vector<TextureDescription> textures;
   std::vector<ShapeDescription> shapes;
   EnvironmentDescription environment;
+  std::vector<PointLightDescription> pointLights;
   // What the loader changed or left out, one line each ("FILE:LINE: ..."), for the user.
   std::vector<std::string> warnings;
 };

@@ -53,6 +53,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
         v.p = ray.o + ray.d * (4 * scene_.extent() + length(ray.o - scene_.center()));
         v.wo = -ray.d;
         v.light = environment;
+        v.infinite = true;
         v.beta = beta;
         v.pdfFwd = pdfDir;
         ++count;
@@ -150,6 +151,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
     y.kind = PathVertex::Kind::Light;
     y.n = y.ns = -w;
     y.light = l;
+    y.infinite = true;
     y.pdfFwd = pickPdf * pdfDir;
     y.beta = scene_.environment()->radiance(w) / y.pdfFwd;
     const float radius = scene_.extent();
@@ -163,6 +165,27 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
     ray.d = -w;
     return randomWalk(ray, y.beta / pdfDisk, pdfDisk, sampler, kLightStream,
                       TransportMode::Importance, maxVertices, roulette, path);
+  }
+  if (light.isPoint()) {
+    // The light's position, then a direction of its emission.
+    const PointLight& point = scene_.pointLight(l);
+    PathVertex& y = path[0];
+    y = PathVertex();
+    y.kind = PathVertex::Kind::Light;
+    y.p = point.position();
+    y.light = l;
+    y.pdfFwd = pickPdf;              // the coefficient of the position's delta
+    y.beta = Spectrum(1 / pickPdf);  // the intensity, by direction, comes at each connection
+    if (maxVertices < 2) return 1;
+    float pdfDir;
+    const Vec3f w = point.sampleDirection(uDir, &pdfDir);
+    const Spectrum beta = point.intensity(w) / (pickPdf * pdfDir);
+    if (!(pdfDir > 0) || isBlack(beta)) return 1;
+    Ray ray;
+    ray.o = y.p;
+    ray.d = w;
+    return randomWalk(ray, beta, pdfDir, sampler, kLightStream, TransportMode::Importance,
+                      maxVertices, roulette, path);
   }
   Vec3f p, n;
   scene_.sampleLightPoint(l, uPoint, &p, &n);
@@ -198,6 +221,24 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   }
   const PathVertex& y = lightPath[s - 1];
   if (y.delta) return Spectrum(0.0f);
+  if (onPointLight(y)) {                // s == 1: the light's position, if nothing blocks it
+    if (t == 1) return Spectrum(0.0f);  // point lights are invisible
+    const PathVertex& z = cameraPath[t - 1];
+    if (z.delta || z.kind != PathVertex::Kind::Surface) return Spectrum(0.0f);
+    const Vec3f d = y.p - z.p;
+    const float d2 = lengthSquared(d);
+    if (!(d2 > 0)) return Spectrum(0.0f);
+    const Vec3f w = d / std::sqrt(d2);  // from z towards the light
+    if (!sidesAgree(w, z.n, z.ns)) return Spectrum(0.0f);
+    Frame fz(z.ns);
+    Spectrum f = scene_.bsdfAt(z.shape, z.uv)
+                     .eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance) *
+                 scene_.pointLight(y.light).intensity(-w);
+    if (isBlack(f)) return Spectrum(0.0f);
+    ++rays_;
+    if (!scene_.visible(z.p, z.n, y.p, Vec3f(0.0f))) return Spectrum(0.0f);
+    return z.beta * f * y.beta * (absDot(z.ns, w) / d2);
+  }
   if (atInfinity(y)) {                  // s == 1: the environment's direction, if nothing blocks it
     if (t == 1) return Spectrum(0.0f);  // no direction of it reaches a point-like lens
     const PathVertex& z = cameraPath[t - 1];
@@ -290,7 +331,7 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     if (n == 2 && atInfinity(at(0))) return s == 0 ? 1.0 : 0.0;  // the camera sees infinity
     for (int i = 0; i < n; ++i) vertexStore[i] = &at(i);
     pathDensities(scene_, vertexStore.data(), n, pL, pE, delta);
-    return maximumHeuristicStrategy(pL, pE, delta, n) == s ? 1.0 : 0.0;
+    return maximumHeuristicStrategy(pL, pE, delta, n, onPointLight(at(0))) == s ? 1.0 : 0.0;
   }
   for (int i = 0; i < n; ++i) {
     const PathVertex& v = at(i);
@@ -341,6 +382,8 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       float pdf;
       if (s == 1 && atInfinity(*y)) {
         pdf = 0;  // not used: the disk's density, projected, is z's
+      } else if (s == 1 && onPointLight(*y)) {
+        pdf = scene_.pointLight(y->light).directionPdf(w);
       } else if (s == 1) {
         pdf = cosineHemispherePdf(dot(y->n, w));
       } else {
@@ -370,9 +413,10 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     sum += power ? r * r : r;
   }
   r = 1;
-  for (int i = s - 1; i >= 0; --i) {  // strategies with fewer light vertices (j = i)
+  const bool pointLight = onPointLight(at(0));  // no camera path reaches it: no strategy 0
+  for (int i = s - 1; i >= 0; --i) {            // strategies with fewer light vertices (j = i)
     r *= remap(pE[i]) / remap(pL[i]);
-    bool connectible = !delta[i] && (i == 0 || !delta[i - 1]);
+    bool connectible = !delta[i] && (i == 0 || !delta[i - 1]) && !(i == 0 && pointLight);
     if (!connectible) continue;
     sum += power ? r * r : r;
   }

@@ -108,11 +108,16 @@ TEST(Furnace, EnergyRedistribution) {
   expectFurnaceEnergyRedistribution(3);
 }
 
-// A floor (a large rectangle at y = 0, normal +y) lit by a sphere of radius r at height h,
-// seen from above by a narrow camera, direct light only (maxDepth 2).
+// A floor (a large rectangle at y = 0, normal +y) lit by a sphere of radius r at height h, or by
+// a point light or a spot aimed straight down at its centre, seen from above by a narrow camera,
+// direct light only (maxDepth 2). The point light has the sphere's irradiance far away: I =
+// pi Le r^2; the spot (pbrt-v3's falloff) is fully bright to 10 degrees off its axis and dark
+// beyond 28, and the camera sees the floor between 13 and 27 degrees.
 constexpr float kRho = 0.5f, kHeight = 2.0f, kRadius = 0.25f, kLe = 10.0f;
+constexpr double kCosSpotStart = 0.98480775301220802032, kCosSpotTotal = 0.88294759285892694203;
+enum class FloorLight { Sphere, Point, Spot };
 
-SceneDescription irradianceScene() {
+SceneDescription irradianceScene(FloorLight lightKind = FloorLight::Sphere, float fov = 10) {
   const float rho = kRho, h = kHeight, radius = kRadius, le = kLe;
   SceneDescription d;
   // Camera at (0.6, 3, 0.4) looking straight down: camera +z -> world -y.
@@ -121,7 +126,7 @@ SceneDescription irradianceScene() {
   m.m[1] = {0, 0, -1, 3.0};
   m.m[2] = {0, 1, 0, 0.4};
   d.camera.toWorld = m;
-  d.camera.fovDegrees = 10;
+  d.camera.fovDegrees = fov;
   d.camera.width = 16;
   d.camera.height = 16;
   d.camera.filter = FilterType::Box;
@@ -137,6 +142,19 @@ SceneDescription irradianceScene() {
   plane.indices = {0, 2, 1, 0, 3, 2};  // counter-clockwise seen from +y
   plane.bsdf = 0;
   d.shapes.push_back(plane);
+  if (lightKind != FloorLight::Sphere) {
+    PointLightDescription point;
+    point.position = Vec3f(0, h, 0);
+    point.intensity = Spectrum(kPi * le * radius * radius);
+    if (lightKind == FloorLight::Spot) {
+      point.spot = true;
+      point.direction = Vec3f(0, -1, 0);
+      point.cosFalloffStart = float(kCosSpotStart);
+      point.cosTotalWidth = float(kCosSpotTotal);
+    }
+    d.pointLights.push_back(point);
+    return d;
+  }
   ShapeDescription light;
   light.type = ShapeDescription::Type::Sphere;
   light.center = Vec3f(0, h, 0);
@@ -149,20 +167,27 @@ SceneDescription irradianceScene() {
 }
 
 // Radiance of the floor seen through film point `film`: rho / pi * E at the floor point, with
-// E = pi Le r^2 h / d^3.
-double floorRadiance(const Camera& cam, const Vec2f& film) {
+// E = pi Le r^2 h / d^3 (= I h / d^3 for the point light; the spot's times its falloff, pbrt-v3's
+// ((cos - cos total) / (cos start - cos total))^4 between the two).
+double floorRadiance(const Camera& cam, const Vec2f& film, FloorLight lightKind) {
   Ray ray = cam.generateRay(film);
   Vec3f p = ray.o + ray.d * (-ray.o.y / ray.d.y);
   double dist = length(p - Vec3f(0, kHeight, 0));
-  return kRho * kLe * kRadius * kRadius * kHeight / (dist * dist * dist);
+  double falloff = 1;
+  if (lightKind == FloorLight::Spot) {
+    const double cosTheta = kHeight / dist;
+    const double t = (cosTheta - kCosSpotTotal) / (kCosSpotStart - kCosSpotTotal);
+    falloff = cosTheta >= kCosSpotStart ? 1 : cosTheta <= kCosSpotTotal ? 0 : t * t * t * t;
+  }
+  return falloff * kRho * kLe * kRadius * kRadius * kHeight / (dist * dist * dist);
 }
 
 // The analytic radiance averaged over pixel (x, y) (a box filter), on a g x g grid.
-double pixelFootprintRadiance(const Camera& cam, int x, int y, int g) {
+double pixelFootprintRadiance(const Camera& cam, int x, int y, int g, FloorLight lightKind) {
   double sum = 0;
   for (int j = 0; j < g; ++j) {
     for (int i = 0; i < g; ++i)
-      sum += floorRadiance(cam, Vec2f(x + (i + 0.5f) / g, y + (j + 0.5f) / g));
+      sum += floorRadiance(cam, Vec2f(x + (i + 0.5f) / g, y + (j + 0.5f) / g), lightKind);
   }
   return sum / (g * g);
 }
@@ -171,8 +196,9 @@ double pixelFootprintRadiance(const Camera& cam, int x, int y, int g) {
 // does not depend on the expected value, so the bound does not grow with the bias it is there to
 // catch. The mean of the two renders' average against the analytic radiance averaged over the
 // film, within 4 standard errors (and Z's, by which a Markov chain's image scales).
-void expectIrradiance(Algorithm algorithm) {
-  auto scene = std::make_shared<Scene>(irradianceScene());
+void expectIrradiance(Algorithm algorithm, FloorLight lightKind = FloorLight::Sphere,
+                      float fov = 10) {
+  auto scene = std::make_shared<Scene>(irradianceScene(lightKind, fov));
   LocalRenderResult r[2];
   for (int k = 0; k < 2; ++k) {
     RenderSettings settings;
@@ -192,7 +218,7 @@ void expectIrradiance(Algorithm algorithm) {
       const double a = r[0].image.at(x, y).y, b = r[1].image.at(x, y).y;
       variance += (a - b) * (a - b) / 4;  // of the two renders' average
       meanRendered += (a + b) / 2;
-      meanExpected += pixelFootprintRadiance(cam, x, y, 8);
+      meanExpected += pixelFootprintRadiance(cam, x, y, 8, lightKind);
     }
   }
   meanRendered /= n;
@@ -224,6 +250,32 @@ TEST(AnalyticIrradiance, PssmltOverPathTracing) {
 }
 TEST(AnalyticIrradiance, Multiplexed) {
   expectIrradiance(Algorithm::MMLT);
+}
+// Point and spot lights: delta positions that only connections reach (no strategy without
+// light vertices), with their intensity and the spot's falloff.
+TEST(AnalyticIrradiance, PointAndSpotPathTracing) {
+  expectIrradiance(Algorithm::PathTracing, FloorLight::Point);
+  expectIrradiance(Algorithm::PathTracing, FloorLight::Spot);
+}
+TEST(AnalyticIrradiance, PointAndSpotBidirectional) {
+  expectIrradiance(Algorithm::Bidirectional, FloorLight::Point);
+  expectIrradiance(Algorithm::Bidirectional, FloorLight::Spot);
+  // Seen through 90 degrees, the floor's paths go to light tracing about as often as to
+  // next-event estimation (the camera's density per unit area of floor is no longer far the
+  // larger), so that both strategies and their weights are tested.
+  expectIrradiance(Algorithm::Bidirectional, FloorLight::Point, 90);
+}
+TEST(AnalyticIrradiance, PointAndSpotPssmlt) {
+  expectIrradiance(Algorithm::PSSMLT, FloorLight::Point);
+  expectIrradiance(Algorithm::PSSMLT, FloorLight::Spot);
+}
+TEST(AnalyticIrradiance, PointAndSpotPssmltOverPathTracing) {
+  expectIrradiance(Algorithm::PSSMLTOverPT, FloorLight::Point);
+  expectIrradiance(Algorithm::PSSMLTOverPT, FloorLight::Spot);
+}
+TEST(AnalyticIrradiance, PointAndSpotMultiplexed) {
+  expectIrradiance(Algorithm::MMLT, FloorLight::Point);
+  expectIrradiance(Algorithm::MMLT, FloorLight::Spot);
 }
 TEST(AnalyticIrradiance, PathSpace) {
   expectIrradiance(Algorithm::MLT);
@@ -258,7 +310,8 @@ TEST(AnalyticIrradiance, EnergyRedistribution) {
     double expected = 0;
     for (int y = 0; y < side; ++y) {
       for (int x = 0; x < side; ++x)
-        expected += pixelFootprintRadiance(cam, (b % 4) * side + x, (b / 4) * side + y, 8);
+        expected += pixelFootprintRadiance(cam, (b % 4) * side + x, (b / 4) * side + y, 8,
+                                           FloorLight::Sphere);
     }
     expected /= side * side;
     const MeanEstimate e = meanOfIndependent(blockMeans[b]);
@@ -323,7 +376,8 @@ TEST(AnalyticIrradiance, BidirectionalWithEveryHeuristic) {
   const Camera& cam = scene.camera();
   double expected = 0;
   for (int y = 0; y < cam.height(); ++y) {
-    for (int x = 0; x < cam.width(); ++x) expected += pixelFootprintRadiance(cam, x, y, 16);
+    for (int x = 0; x < cam.width(); ++x)
+      expected += pixelFootprintRadiance(cam, x, y, 16, FloorLight::Sphere);
   }
   expected /= cam.pixelCount();
   for (MisHeuristic h : {MisHeuristic::Balance, MisHeuristic::Power, MisHeuristic::Maximum}) {

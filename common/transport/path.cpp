@@ -99,9 +99,12 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
     *d2 = double(lengthSquared(d));
     return d / std::sqrt(float(*d2));
   };
+  // A point light has no cosine either (its intensity is per solid angle), and no camera sees
+  // it: a path of one edge from it carries nothing.
   auto senderCosine = [&](const PathVertex& sender, const Vec3f& w) {
-    return atInfinity(sender) ? 1.0 : double(absDot(sender.n, w));
+    return atInfinity(sender) || onPointLight(sender) ? 1.0 : double(absDot(sender.n, w));
   };
+  if (k == 1 && onPointLight(x0)) return out;
   // Emission towards x_1.
   double d2;
   Vec3f w = direction(0, 1, &d2);

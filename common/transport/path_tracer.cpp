@@ -43,6 +43,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
         v.n = v.ns = -ray.d;
         v.p = ray.o + ray.d * (4 * scene_.extent() + length(ray.o - scene_.center()));
         v.light = environment;
+        v.infinite = true;
         vertices->push_back(v);
       }
       Spectrum Le = scene_.environment()->radiance(ray.d);
@@ -94,7 +95,30 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     if (!bsdf.isDelta() && depth + 1 <= maxDepth_ && !scene_.lights().empty()) {
       float pickPdf;
       int l = scene_.pickLight(uLight[0], &pickPdf);
-      if (l == scene_.environmentLight()) {
+      if (scene_.lights()[l].isPoint()) {
+        // The light's position; no BSDF sample reaches a point, so no MIS.
+        const PointLight& point = scene_.pointLight(l);
+        const Vec3f d = point.position() - hit.p;
+        const float d2 = lengthSquared(d);
+        if (d2 > 0) {
+          const Vec3f wiW = d / std::sqrt(d2);
+          const Vec3f wi = frame.toLocal(wiW);
+          const Spectrum I = point.intensity(-wiW);
+          const Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
+          if (!isBlack(I) && !isBlack(f) && sidesAgree(wiW, hit.ng, hit.ns)) {
+            ++rays_;
+            if (scene_.visible(hit.p, hit.ng, point.position(), Vec3f(0.0f))) {
+              PathVertex lightVertex;
+              if (vertices) {
+                lightVertex.kind = PathVertex::Kind::Light;
+                lightVertex.p = point.position();
+                lightVertex.light = l;
+              }
+              add(beta * f * I * (std::fabs(wi.z) / (d2 * pickPdf)), &lightVertex);
+            }
+          }
+        }
+      } else if (l == scene_.environmentLight()) {
         // A direction of the environment, by its importance; unblocked, it reaches it.
         float pdfDir;
         const Vec3f wiW = scene_.environment()->sample({uLight[1], uLight[2]}, &pdfDir);
@@ -110,6 +134,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
               if (vertices) {
                 lightVertex.kind = PathVertex::Kind::Light;
                 lightVertex.n = lightVertex.ns = -wiW;
+                lightVertex.infinite = true;
                 lightVertex.p =
                     hit.p + wiW * (4 * scene_.extent() + length(hit.p - scene_.center()));
                 lightVertex.light = l;

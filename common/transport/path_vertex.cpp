@@ -62,6 +62,11 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
     const EnvironmentLight* environment = scene.environment();
     pL[0] = environment ? double(scene.lightPickPdf(x0.light)) * environment->pdf(-x0.n) : 0.0;
     if (n > 2) pL[1] = double(scene.environmentDiskDensity()) * double(absDot(x[1]->n, x0.n));
+  } else if (onPointLight(x0)) {
+    // The position's delta coefficient, then the emission's direction density.
+    pL[0] = double(scene.lightPickPdf(x0.light));
+    const Vec3f w = normalize(x[1]->p - x0.p);
+    pL[1] = toAreaDensity(scene.pointLight(x0.light).directionPdf(w), x0.p, x[1]->p, x[1]->n);
   } else if (x0.light >= 0) {
     pL[0] = double(scene.lightPickPdf(x0.light)) / double(scene.lights()[x0.light].area);
     Vec3f w = normalize(x[1]->p - x0.p);
@@ -84,9 +89,11 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
                                  directionBetween(next, *x[i]), false),
                       next, *x[i]);
   }
+  if (onPointLight(x0)) pE[0] = 0;  // no camera path reaches a point
 }
 
-int maximumHeuristicStrategy(const double* pL, const double* pE, const char* delta, int n) {
+int maximumHeuristicStrategy(const double* pL, const double* pE, const char* delta, int n,
+                             bool pointLight) {
   // Strategy s has density prod_{i<s} pL[i] prod_{i>=s} pE[i]. A vertex sampled through a
   // Dirac lobe counts as one on either side (Veach 1997, 10.3.5), the pinhole as well; a zero
   // density elsewhere means the strategy cannot build the path. Strategies that would connect
@@ -103,7 +110,7 @@ int maximumHeuristicStrategy(const double* pL, const double* pE, const char* del
   int best = -1;
   long long bestLevel = 0;
   for (int s = 0; s <= n - 1; ++s) {  // t = n - s >= 1 camera vertices
-    bool possible = s == 0 ? pL[0] > 0 : !delta[s - 1] && !delta[s];
+    bool possible = s == 0 ? pL[0] > 0 && !pointLight : !delta[s - 1] && !delta[s];
     double logDensity = 0;
     for (int i = 0; i < n && possible; ++i) {
       const bool fromLight = i < s;

@@ -18,11 +18,12 @@ struct PathVertex {
   Vec3f wo;  // unit direction to the previous vertex of its own subpath
   Vec2f uv;  // texture coordinates, where the BSDF is looked up (Scene::bsdfAt)
   int shape = -1;
-  int light = -1;      // the area light this vertex lies on, or -1
-  Spectrum beta;       // subpath throughput up to here, divided by the sampling densities
-  float pdfFwd = 0;    // area density of this vertex, sampled from its own subpath's side
-  float pdfRev = 0;    // area density of this vertex, sampled from the other side
-  bool delta = false;  // scattered by a Dirac lobe here
+  int light = -1;         // the area light this vertex lies on, or -1
+  Spectrum beta;          // subpath throughput up to here, divided by the sampling densities
+  float pdfFwd = 0;       // area density of this vertex, sampled from its own subpath's side
+  float pdfRev = 0;       // area density of this vertex, sampled from the other side
+  bool delta = false;     // scattered by a Dirac lobe here
+  bool infinite = false;  // on the environment, at infinity (see atInfinity)
 };
 
 // A vertex on the environment: a light vertex without a shape, at infinity. Its n is the unit
@@ -31,7 +32,14 @@ struct PathVertex {
 // that direction, from either side; the vertex after it, sampled from its side, has the area
 // density of the environment's disk times that vertex's cosine (Scene::environmentDiskDensity).
 inline bool atInfinity(const PathVertex& v) {
-  return v.kind == PathVertex::Kind::Light && v.shape < 0;
+  return v.kind == PathVertex::Kind::Light && v.infinite;
+}
+
+// A vertex on a point light: a light vertex without a shape, not at infinity. Its n is zero (a
+// point has no side); it is sampled only from the light side, with the probability of picking
+// its light (the coefficient of its positional delta), and no camera path ever reaches it.
+inline bool onPointLight(const PathVertex& v) {
+  return v.kind == PathVertex::Kind::Light && v.shape < 0 && !v.infinite;
 }
 
 // The unit direction from a to b, either of which may lie at infinity.
@@ -60,6 +68,8 @@ void pathDensities(const Scene& scene, const PathVertex* const* path, int n, dou
 // The strategy s (light vertices) of largest density among those that can build the path, ties
 // to the fewer light vertices: the maximum heuristic's winner (Veach and Guibas 1994). One
 // function of the densities above, so that every strategy that evaluates the path agrees on it.
-int maximumHeuristicStrategy(const double* pL, const double* pE, const char* delta, int n);
+// `pointLight`: x_0 is on a point light, which no strategy without light vertices builds.
+int maximumHeuristicStrategy(const double* pL, const double* pE, const char* delta, int n,
+                             bool pointLight = false);
 
 }  // namespace farm

@@ -164,7 +164,7 @@ class MitsubaLoader {
       } else if (tag == "shape") {
         parseShape(child);
       } else if (tag == "emitter") {
-        parseEnvironmentEmitter(child);
+        parseTopLevelEmitter(child);
       } else {
         failUnknownElement(child);
       }
@@ -870,13 +870,52 @@ class MitsubaLoader {
     return radiance;
   }
 
-  // <emitter type="constant"> and <emitter type="envmap"> at the top level: the environment.
-  void parseEnvironmentEmitter(const pugi::xml_node& node) {
+  double getNumber(PropertySet& props, const char* name, double def) const {
+    pugi::xml_node n = props.take(name);
+    if (!n) return def;
+    requireTag(n, {"float", "integer"});
+    return number(n, requireValue(n), std::string("parameter '") + name + "'");
+  }
+
+  // <emitter type="point"> and <emitter type="spot">: intensity from a position (point's
+  // "position", or toWorld's origin); a spot looks down its toWorld's +z, fully bright within
+  // beamWidth and dark beyond cutoffAngle (degrees).
+  void parsePointEmitter(const pugi::xml_node& node, const std::string& type) {
+    PropertySet props = collectProperties(node, nullptr);
+    props.take("samplingWeight");
+    PointLightDescription light;
+    light.intensity = getSpectrum(props, "intensity", Spectrum(1.0f));
+    Matrix4 toWorld = Matrix4::identity();
+    if (pugi::xml_node t = props.take("toWorld")) toWorld = transformOf(t);
+    light.position = toWorld.applyPoint(getPoint(props, "position", Vec3f(0.0f)));
+    if (type == "spot") {
+      const double cutoff = getNumber(props, "cutoffAngle", 20);
+      const double beam = getNumber(props, "beamWidth", cutoff * 3 / 4);
+      if (!(cutoff > 0 && cutoff <= 90)) fail(node, "spot cutoffAngle must be in (0, 90] degrees");
+      if (!(beam >= 0 && beam <= cutoff)) fail(node, "spot beamWidth must be in [0, cutoffAngle]");
+      const Vec3f axis = toWorld.applyVector(Vec3f(0, 0, 1));
+      if (!(length(axis) > 0) || !isFinite(axis)) fail(node, "spot toWorld is singular");
+      light.spot = true;
+      light.direction = normalize(axis);
+      light.cosTotalWidth = float(std::cos(cutoff * M_PI / 180));
+      light.cosFalloffStart = float(std::cos(beam * M_PI / 180));
+      light.falloff = PointLightDescription::Falloff::MitsubaLinearAngle;
+    }
+    rejectUnused(props, "emitter type '" + type + "'");
+    if (!isFinite(light.position)) fail(node, type + " emitter: its position is not finite");
+    light.origin = fs::path(path_).filename().string() + ":" + std::to_string(lineOf(node)) + " (" +
+                   type + ")";
+    scene_.pointLights.push_back(light);
+  }
+
+  // <emitter> at the top level: the environment (constant, envmap) or a point light.
+  void parseTopLevelEmitter(const pugi::xml_node& node) {
     std::string type = node.attribute("type").as_string();
     if (type == "area") fail(node, "an area <emitter> must be nested in the <shape> that emits");
+    if (type == "point" || type == "spot") return parsePointEmitter(node, type);
     if (type != "constant" && type != "envmap")
       fail(node, "unsupported emitter type '" + type +
-                     "' (area emitters nested in shapes, constant and envmap)");
+                     "' (area emitters nested in shapes, constant, envmap, point and spot)");
     if (scene_.environment.present)
       fail(node, "more than one environment emitter (constant or envmap)");
     PropertySet props = collectProperties(node, nullptr);

@@ -5,10 +5,10 @@
 // <rfilter> (tent, box, gaussian), <bsdf> diffuse / twosided / dielectric / roughconductor
 // (declared at top level with an id and used through <ref>, or inline in a shape), <shape>
 // rectangle / cube / sphere / obj / ply with an optional area <emitter>, one constant or envmap
-// <emitter> (the environment), and <transform> built from matrix, translate, scale, rotate,
-// lookat. Anything else that would change the picture is an error
-// rather than silently ignored: a render that quietly differs from the scene is worse than one that
-// refuses to start.
+// <emitter> (the environment), point and spot <emitter>s, and <transform> built from matrix,
+// translate, scale, rotate, lookat. Anything else that would change the picture is an error
+// rather than silently ignored: a render that quietly differs from the scene is worse than one
+// that refuses to start.
 #include <string>
 
 #include "common/scene/loaders/scene_files.h"

@@ -140,6 +140,11 @@ class PbrtLoader {
     parseFile(text, path_, 0);
     // pbrt-v4's default filter is a gaussian of radius 1.5 and sigma 0.5; v3's a box.
     if (sawV4_ && (!sawFilter_ || gaussianDefaults_)) setGaussian(1.5, 2);
+    // pbrt-v4's spots fall off by a smoothstep, v3's by the fourth power.
+    if (sawV4_) {
+      for (PointLightDescription& l : scene_.pointLights)
+        if (l.spot) l.falloff = PointLightDescription::Falloff::PbrtV4Smoothstep;
+    }
     if (!sawWorld_) throw SceneLoadError(path_, 0, "no WorldBegin: the file describes no scene");
     if (!attributeStack_.empty())
       throw SceneLoadError(path_, 0, "AttributeBegin without AttributeEnd at the end of the file");
@@ -1099,11 +1104,55 @@ class PbrtLoader {
 
   // LightSource "infinite": the environment, constant or a lat-long image (v3's "mapname",
   // v4's "filename"), in the light's coordinate system (z up).
+  // A "point3" parameter (v3 also writes "point"), in the light's coordinate system.
+  Vec3f getPoint(Directive& d, const std::string& name, const Vec3f& def) {
+    Param* p = typed(d, name, {"point3", "point"});
+    if (!p) return def;
+    if (p->numbers.size() != 3) failParam(d, *p, "parameter '" + name + "' takes 3 numbers");
+    return Vec3f(float(p->numbers[0]), float(p->numbers[1]), float(p->numbers[2]));
+  }
+
+  // LightSource "point" and "spot": intensity I (times scale) from "from", a spot aimed at "to"
+  // with a cone of "coneangle" degrees whose last "conedeltaangle" (v4: "conedelta") fall off.
+  void parsePointLight(Directive& d) {
+    const std::string& type = d.strings[0];
+    if (inObject_) fail(d, "a light source inside an object definition");
+    PointLightDescription light;
+    Spectrum I(1.0f), scale(1.0f);
+    getSpectrum(d, "I", &I);
+    getSpectrum(d, "scale", &scale);
+    if (d.params.has("power")) fail(d, type + " light 'power' is not supported: give I");
+    const Vec3f from = getPoint(d, "from", Vec3f(0.0f));
+    light.position = attrs_.ctm.applyPoint(from);
+    light.intensity = I * scale;
+    if (type == "spot") {
+      const Vec3f to = getPoint(d, "to", Vec3f(0, 0, 1));
+      const double cone = getFloat(d, "coneangle", 30);
+      double delta = getFloat(d, "conedeltaangle", 5);
+      if (d.params.has("conedelta")) delta = getFloat(d, "conedelta", 5);
+      if (!(cone > 0 && cone <= 180)) fail(d, "spot coneangle must be in (0, 180] degrees");
+      if (!(delta >= 0 && delta <= cone)) fail(d, "spot cone delta must be in [0, coneangle]");
+      const Vec3f axis = attrs_.ctm.applyVector(to - from);
+      if (!(length(axis) > 0) || !isFinite(axis)) fail(d, "spot: \"from\" and \"to\" coincide");
+      light.spot = true;
+      light.direction = normalize(axis);
+      light.cosTotalWidth = float(std::cos(cone * M_PI / 180));
+      light.cosFalloffStart = float(std::cos((cone - delta) * M_PI / 180));
+      light.falloff = PointLightDescription::Falloff::PbrtV3Quartic;  // v4's: at the end
+    }
+    rejectUnused(d, type + " light");
+    if (!isFinite(light.position)) fail(d, type + " light: its position is not finite");
+    light.origin =
+        fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type + ")";
+    scene_.pointLights.push_back(light);
+  }
+
   void parseLightSource(Directive& d) {
+    if (d.strings[0] == "point" || d.strings[0] == "spot") return parsePointLight(d);
     if (d.strings[0] != "infinite")
       fail(d, "light source '" + d.strings[0] +
-                  "' is not supported yet (AreaLightSource \"diffuse\" and LightSource "
-                  "\"infinite\")");
+                  "' is not supported yet (AreaLightSource \"diffuse\"; LightSource "
+                  "\"infinite\", \"point\" and \"spot\")");
     if (scene_.environment.present) fail(d, "more than one infinite light");
     if (inObject_) fail(d, "a light source inside an object definition");
     Spectrum L(1.0f), scale(1.0f);

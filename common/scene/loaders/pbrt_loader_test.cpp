@@ -361,7 +361,8 @@ struct BadScene {
 
 TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
   const BadScene cases[] = {
-      {"LightSource \"point\" \"rgb I\" [1 1 1]\n", 5, "light source 'point' is not supported"},
+      {"LightSource \"goniometric\" \"rgb I\" [1 1 1]\n", 5,
+       "light source 'goniometric' is not supported"},
       {"\n\nShape \"curve\" \"point P\" [0 0 0 1 1 1 2 2 2 3 3 3]\n", 7,
        "shape 'curve' is not supported"},
       {"Material \"coateddiffuse\"\n", 5, "material 'coateddiffuse' is not supported"},

@@ -1,6 +1,7 @@
-// Environment lights from both formats: Mitsuba's constant and envmap (y up, u = atan2(x, -z) /
-// 2 pi) and pbrt's infinite (z up, u = atan2(y, x) / 2 pi; v3's "mapname", v4's "filename"),
-// each texel of a map found where its format puts it, and their errors.
+// Lights other than area lights from both formats. Environments: Mitsuba's constant and envmap
+// (y up, u = atan2(x, -z) / 2 pi) and pbrt's infinite (z up, u = atan2(y, x) / 2 pi; v3's
+// "mapname", v4's "filename"), each texel of a map found where its format puts it. Point and
+// spot lights: position, intensity, axis, cone and each format's falloff. And their errors.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -122,6 +123,66 @@ TEST(EnvironmentLoader, ConstantEnvironments) {
   }
 }
 
+void expectNear(const Vec3f& a, const Vec3f& b) {
+  EXPECT_NEAR(a.x, b.x, 1e-5f);
+  EXPECT_NEAR(a.y, b.y, 1e-5f);
+  EXPECT_NEAR(a.z, b.z, 1e-5f);
+}
+
+TEST(PointLightLoader, PbrtPointAndSpot) {
+  TempDir dir;
+  const std::string spot =
+      "LightSource \"spot\" \"rgb I\" [5 5 5] \"point from\" [0 4 0] \"point to\" [0 0 0] "
+      "\"float coneangle\" 40 \"float conedeltaangle\" 10\n";
+  const std::string world =
+      "AttributeBegin\nTranslate 1 2 3\n"
+      "LightSource \"point\" \"rgb I\" [1 2 3] \"float scale\" 2 \"point3 from\" [0 1 0]\n"
+      "AttributeEnd\n" +
+      spot;
+  SceneDescription v3 = loadSceneDescription(dir.write("v3.pbrt", pbrtScene(world)));
+  ASSERT_EQ(v3.pointLights.size(), 2u);
+  const PointLightDescription& p = v3.pointLights[0];
+  EXPECT_FALSE(p.spot);
+  expectNear(p.position, Vec3f(1, 3, 3));
+  expectNear(p.intensity, Vec3f(2, 4, 6));
+  const PointLightDescription& s = v3.pointLights[1];
+  EXPECT_TRUE(s.spot);
+  expectNear(s.position, Vec3f(0, 4, 0));
+  expectNear(s.direction, Vec3f(0, -1, 0));
+  EXPECT_NEAR(s.cosTotalWidth, std::cos(40 * kPi / 180), 1e-6f);
+  EXPECT_NEAR(s.cosFalloffStart, std::cos(30 * kPi / 180), 1e-6f);
+  EXPECT_EQ(s.falloff, PointLightDescription::Falloff::PbrtV3Quartic);
+  // A v4 file (its "diffuse" material says so): the same spot falls off by a smoothstep.
+  SceneDescription v4 =
+      loadSceneDescription(dir.write("v4.pbrt", pbrtScene("Material \"diffuse\"\n" + spot)));
+  ASSERT_EQ(v4.pointLights.size(), 1u);
+  EXPECT_EQ(v4.pointLights[0].falloff, PointLightDescription::Falloff::PbrtV4Smoothstep);
+}
+
+TEST(PointLightLoader, MitsubaPointAndSpot) {
+  TempDir dir;
+  const std::string path =
+      dir.write("scene.xml",
+                std::string(kMitsubaHead) +
+                    "  <emitter type=\"point\"><point name=\"position\" x=\"1\" y=\"2\" z=\"3\"/>"
+                    "<rgb name=\"intensity\" value=\"4 5 6\"/></emitter>\n"
+                    "  <emitter type=\"spot\"><float name=\"cutoffAngle\" value=\"30\"/>"
+                    "<rgb name=\"intensity\" value=\"7\"/>\n"
+                    "    <transform name=\"toWorld\"><lookat origin=\"0, 5, 0\" target=\"0, 0, 0\" "
+                    "up=\"0, 0, 1\"/></transform></emitter>\n</scene>\n");
+  SceneDescription d = loadSceneDescription(path);
+  ASSERT_EQ(d.pointLights.size(), 2u);
+  expectNear(d.pointLights[0].position, Vec3f(1, 2, 3));
+  expectNear(d.pointLights[0].intensity, Vec3f(4, 5, 6));
+  const PointLightDescription& s = d.pointLights[1];
+  EXPECT_TRUE(s.spot);
+  expectNear(s.position, Vec3f(0, 5, 0));
+  expectNear(s.direction, Vec3f(0, -1, 0));
+  EXPECT_NEAR(s.cosTotalWidth, std::cos(30 * kPi / 180), 1e-6f);
+  EXPECT_NEAR(s.cosFalloffStart, std::cos(22.5f * kPi / 180), 1e-6f);  // 3/4 of the cutoff
+  EXPECT_EQ(s.falloff, PointLightDescription::Falloff::MitsubaLinearAngle);
+}
+
 TEST(EnvironmentLoader, BadEnvironmentsGetAClearError) {
   TempDir dir;
   writeMap(dir, "square.exr", 4, 4);
@@ -147,7 +208,7 @@ TEST(EnvironmentLoader, BadEnvironmentsGetAClearError) {
        pbrtScene("LightSource \"infinite\" \"string filename\" \"sky.exr\" "
                  "\"string mapname\" \"sky.exr\"\n"),
        "both"},
-      {"h.pbrt", pbrtScene("LightSource \"spot\"\n"), "light source 'spot' is not supported"},
+      {"h.pbrt", pbrtScene("LightSource \"distant\"\n"), "light source 'distant' is not supported"},
       {"i.pbrt", pbrtScene("LightSource \"infinite\" \"rgb L\" [1 -1 1]\n"), "negative"},
       {"j.pbrt", pbrtScene("LightSource \"infinite\" \"float power\" 3\n"), "power"},
       {"k.xml",
@@ -156,14 +217,27 @@ TEST(EnvironmentLoader, BadEnvironmentsGetAClearError) {
        "more than one environment emitter"},
       {"l.xml", std::string(kMitsubaHead) + "<emitter type=\"envmap\"/>\n</scene>\n",
        "envmap has no filename"},
-      {"m.xml", std::string(kMitsubaHead) + "<emitter type=\"point\"/>\n</scene>\n",
-       "unsupported emitter type 'point'"},
+      {"m.xml", std::string(kMitsubaHead) + "<emitter type=\"directional\"/>\n</scene>\n",
+       "unsupported emitter type 'directional'"},
       {"n.xml",
        std::string(kMitsubaHead) + envmap +
            "sky.exr\"/><float name=\"gamma\" value=\"2.2\"/></emitter>\n</scene>\n",
        "unsupported parameter 'gamma'"},
       {"o.xml", std::string(kMitsubaHead) + envmap + "square.exr\"/></emitter>\n</scene>\n",
        "only lat-long maps"},
+      {"p.pbrt", pbrtScene("LightSource \"spot\" \"float coneangle\" 0\n"), "coneangle"},
+      {"q.pbrt", pbrtScene("LightSource \"spot\" \"point from\" [1 1 1] \"point to\" [1 1 1]\n"),
+       "coincide"},
+      {"r.pbrt", pbrtScene("LightSource \"point\" \"float power\" 10\n"), "'power'"},
+      {"s.pbrt", pbrtScene("LightSource \"point\" \"rgb I\" [1 1]\n"), "3 numbers"},
+      {"t.xml",
+       std::string(kMitsubaHead) + "<emitter type=\"spot\"><float name=\"beamWidth\" value=\"40\"/>"
+                                   "</emitter>\n</scene>\n",
+       "beamWidth"},
+      {"u.xml",
+       std::string(kMitsubaHead) + "<emitter type=\"point\"><float name=\"radius\" value=\"1\"/>"
+                                   "</emitter>\n</scene>\n",
+       "unsupported parameter 'radius'"},
   };
   for (const Case& c : cases) {
     const std::string error = loadError(dir.write(c.name, c.text));
