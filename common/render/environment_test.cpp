@@ -244,6 +244,18 @@ TEST(Environment, PathSpaceChainsRefuseItAndPointLights) {
         << e.what();
   }
   EXPECT_EQ(loadScene(path, pt)->lights().size(), 1u);
+  // And two-sided area lights.
+  std::ofstream(path) << "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+                         "AreaLightSource \"diffuse\" \"bool twosided\" true\nShape \"sphere\"\n";
+  try {
+    loadScene(path, mlt);
+    ADD_FAILURE() << "mlt accepted a two-sided light";
+  } catch (const SceneLoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("a two-sided area light is not supported by mlt"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(loadScene(path, pt)->lights()[0].twoSided);
   std::filesystem::remove(path);
 }
 

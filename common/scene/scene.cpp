@@ -140,7 +140,8 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
       light.shape = i;
       light.radiance = s.radiance;
       light.area = float(area);
-      light.power = float(double(luminance(s.radiance)) * area * kPi);
+      light.twoSided = s.emitsBothSides;
+      light.power = float(double(luminance(s.radiance)) * area * kPi * (s.emitsBothSides ? 2 : 1));
       shapeLight_[i] = int(lights_.size());
       lights_.push_back(light);
     }

@@ -30,7 +30,8 @@ struct AreaLight {
   int point = -1;  // index into the scene's point lights
   Spectrum radiance;
   float area = 0;
-  float power = 0;  // luminance of radiance * area * pi: the light selection weight
+  float power = 0;  // luminance of radiance * area * pi (twice for two sides): selection weight
+  bool twoSided = false;  // an area light that emits on both sides of its surface
   bool isEnvironment() const { return shape < 0 && point < 0; }
   bool isPoint() const { return point >= 0; }
 };
@@ -107,7 +108,15 @@ class Scene {
   Spectrum emitted(int light, const Vec3f& n, const Vec3f& w) const {
     if (light == environmentLight_) return environment_->radiance(-w);
     if (lights_[light].isPoint()) return pointLight(light).intensity(w);
-    return dot(n, w) > 0 ? lights_[light].radiance : Spectrum(0.0f);
+    const float c = dot(n, w);
+    return c > 0 || (lights_[light].twoSided && c < 0) ? lights_[light].radiance : Spectrum(0.0f);
+  }
+  // The solid-angle density with which an area light's subpaths leave it in direction w at a
+  // point of normal n: cosine-weighted about n, on a side picked with probability 1/2 when the
+  // light has two.
+  float emissionPdf(int light, const Vec3f& n, const Vec3f& w) const {
+    const float c = dot(n, w);
+    return lights_[light].twoSided ? 0.5f * kInvPi * std::fabs(c) : (c > 0 ? c * kInvPi : 0.0f);
   }
 
  private:

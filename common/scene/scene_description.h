@@ -74,7 +74,8 @@ struct ShapeDescription {
   // Material and emission
   int bsdf = -1;  // index into SceneDescription::bsdfs
   bool isEmitter = false;
-  Spectrum radiance{0.0f};  // area emitter radiance (emits on the side the normal faces)
+  Spectrum radiance{0.0f};      // area emitter radiance (emits on the side the normal faces)
+  bool emitsBothSides = false;  // pbrt's "twosided" area light: the same radiance on both
   // Where it came from, for messages
   std::string origin;  // e.g. "scene.xml:42 (obj models/Mesh001.obj)"
 };

@@ -201,12 +201,19 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   y.pdfFwd = pdfPos;
   y.beta = light.radiance / pdfPos;
   if (maxVertices < 2) return 1;
-  // Area lights emit with a cosine distribution: sample it exactly, so beta keeps pi.
+  // Area lights emit with a cosine distribution: sample it exactly, so beta keeps pi. A
+  // two-sided light picks its side with the first number (rescaled, to keep stratification).
+  bool back = false;
+  if (light.twoSided) {
+    back = uDir.x >= 0.5f;
+    uDir.x = std::min(back ? 2 * uDir.x - 1 : 2 * uDir.x, 0x1.fffffep-1f);
+  }
   Vec3f local = squareToCosineHemisphere(uDir);
-  float pdfDir = cosineHemispherePdf(local.z);
+  if (back) local.z = -local.z;
+  float pdfDir = scene_.emissionPdf(l, Vec3f(0, 0, 1), local);
   if (!(pdfDir > 0)) return 1;
   Vec3f d = Frame(n).toWorld(local);
-  Spectrum beta = y.beta * (local.z / pdfDir);
+  Spectrum beta = y.beta * (std::fabs(local.z) / pdfDir);
   Ray ray = scene_.spawnRay(p, n, d);
   return randomWalk(ray, beta, pdfDir, sampler, kLightStream, TransportMode::Importance,
                     maxVertices, roulette, path);
@@ -264,7 +271,7 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
     float We = camera.importance(lens, -w);
     Spectrum f;
     if (s == 1) {
-      f = dot(y.n, w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
+      f = Spectrum(scene_.emissionPdf(y.light, y.n, w) > 0 ? 1.0f : 0.0f);  // its emitting side
     } else {
       if (!sidesAgree(w, y.n, y.ns)) return Spectrum(0.0f);
       Frame frame(y.ns);
@@ -288,7 +295,7 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
       scene_.bsdfAt(z.shape, z.uv).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
   if (isBlack(f)) return Spectrum(0.0f);
   if (s == 1) {
-    f *= dot(y.n, -w) > 0 ? Spectrum(1.0f) : Spectrum(0.0f);
+    f *= scene_.emissionPdf(y.light, y.n, -w) > 0 ? 1.0f : 0.0f;  // its emitting side
   } else {
     if (!sidesAgree(-w, y.n, y.ns)) return Spectrum(0.0f);
     Frame fy(y.ns);
@@ -375,7 +382,7 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       if (t > 1) {
         const PathVertex& zPrev = cameraPath[t - 2];
         Vec3f w = directionTo(z->p, zPrev.p);
-        pL[1] = toAreaDensity(cosineHemispherePdf(dot(z->n, w)), z->p, zPrev);
+        pL[1] = toAreaDensity(scene_.emissionPdf(z->light, z->n, w), z->p, zPrev);
       }
     } else {
       Vec3f w = directionBetween(*y, *z);
@@ -385,7 +392,7 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       } else if (s == 1 && onPointLight(*y)) {
         pdf = scene_.pointLight(y->light).directionPdf(w);
       } else if (s == 1) {
-        pdf = cosineHemispherePdf(dot(y->n, w));
+        pdf = scene_.emissionPdf(y->light, y->n, w);
       } else {
         Frame fy(y->ns);
         pdf = scene_.bsdfAt(y->shape, y->uv).pdf(fy.toLocal(y->wo), fy.toLocal(w));

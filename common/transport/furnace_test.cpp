@@ -115,7 +115,9 @@ TEST(Furnace, EnergyRedistribution) {
 // beyond 28, and the camera sees the floor between 13 and 27 degrees.
 constexpr float kRho = 0.5f, kHeight = 2.0f, kRadius = 0.25f, kLe = 10.0f;
 constexpr double kCosSpotStart = 0.98480775301220802032, kCosSpotTotal = 0.88294759285892694203;
-enum class FloorLight { Sphere, Point, Spot };
+// TwoSidedQuad: a square of side 2 r at height h, facing up (away from the floor) but emitting on
+// both sides, whose irradiance is Lambert's formula for a polygon.
+enum class FloorLight { Sphere, Point, Spot, TwoSidedQuad };
 
 SceneDescription irradianceScene(FloorLight lightKind = FloorLight::Sphere, float fov = 10) {
   const float rho = kRho, h = kHeight, radius = kRadius, le = kLe;
@@ -123,7 +125,8 @@ SceneDescription irradianceScene(FloorLight lightKind = FloorLight::Sphere, floa
   // Camera at (0.6, 3, 0.4) looking straight down: camera +z -> world -y.
   Matrix4 m = Matrix4::identity();
   m.m[0] = {1, 0, 0, 0.6};
-  m.m[1] = {0, 0, -1, 3.0};
+  // Below the two-sided quad (at height 2), so that a wide view sees only the floor.
+  m.m[1] = {0, 0, -1, lightKind == FloorLight::TwoSidedQuad ? 1.5 : 3.0};
   m.m[2] = {0, 1, 0, 0.4};
   d.camera.toWorld = m;
   d.camera.fovDegrees = fov;
@@ -142,6 +145,18 @@ SceneDescription irradianceScene(FloorLight lightKind = FloorLight::Sphere, floa
   plane.indices = {0, 2, 1, 0, 3, 2};  // counter-clockwise seen from +y
   plane.bsdf = 0;
   d.shapes.push_back(plane);
+  if (lightKind == FloorLight::TwoSidedQuad) {
+    ShapeDescription quad;
+    quad.positions = {
+        {-radius, h, -radius}, {radius, h, -radius}, {radius, h, radius}, {-radius, h, radius}};
+    quad.indices = {0, 2, 1, 0, 3, 2};  // counter-clockwise seen from +y: facing up
+    quad.bsdf = 1;
+    quad.isEmitter = true;
+    quad.radiance = Spectrum(le);
+    quad.emitsBothSides = true;
+    d.shapes.push_back(quad);
+    return d;
+  }
   if (lightKind != FloorLight::Sphere) {
     PointLightDescription point;
     point.position = Vec3f(0, h, 0);
@@ -173,6 +188,26 @@ double floorRadiance(const Camera& cam, const Vec2f& film, FloorLight lightKind)
   Ray ray = cam.generateRay(film);
   Vec3f p = ray.o + ray.d * (-ray.o.y / ray.d.y);
   double dist = length(p - Vec3f(0, kHeight, 0));
+  if (lightKind == FloorLight::TwoSidedQuad) {
+    // Lambert: E = Le / 2 |sum_i angle(a_i, a_i+1) (n . unit(a_i x a_i+1))|, a_i = v_i - p.
+    const double r = kRadius;
+    const double v[4][3] = {{-r, kHeight, -r}, {r, kHeight, -r}, {r, kHeight, r}, {-r, kHeight, r}};
+    double sum = 0;
+    for (int i = 0; i < 4; ++i) {
+      const double* a0 = v[i];
+      const double* a1 = v[(i + 1) % 4];
+      const double a[3] = {a0[0] - p.x, a0[1] - p.y, a0[2] - p.z};
+      const double b[3] = {a1[0] - p.x, a1[1] - p.y, a1[2] - p.z};
+      const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+      const double angle = std::acos((a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb));
+      const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                           a[0] * b[1] - a[1] * b[0]};
+      const double lc = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+      sum += angle * c[1] / lc;  // the floor's normal is +y
+    }
+    return kRho / kPi * kLe * 0.5 * std::fabs(sum);
+  }
   double falloff = 1;
   if (lightKind == FloorLight::Spot) {
     const double cosTheta = kHeight / dist;
@@ -276,6 +311,15 @@ TEST(AnalyticIrradiance, PointAndSpotPssmltOverPathTracing) {
 TEST(AnalyticIrradiance, PointAndSpotMultiplexed) {
   expectIrradiance(Algorithm::MMLT, FloorLight::Point);
   expectIrradiance(Algorithm::MMLT, FloorLight::Spot);
+}
+// A two-sided area light facing away from the floor lights it from its back; seen through 90
+// degrees, light tracing from its sides carries much of the weight.
+TEST(AnalyticIrradiance, TwoSidedLight) {
+  for (Algorithm a : {Algorithm::PathTracing, Algorithm::Bidirectional, Algorithm::PSSMLT,
+                      Algorithm::PSSMLTOverPT, Algorithm::MMLT}) {
+    expectIrradiance(a, FloorLight::TwoSidedQuad);
+    expectIrradiance(a, FloorLight::TwoSidedQuad, 90);
+  }
 }
 TEST(AnalyticIrradiance, PathSpace) {
   expectIrradiance(Algorithm::MLT);

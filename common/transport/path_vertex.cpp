@@ -70,7 +70,7 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
   } else if (x0.light >= 0) {
     pL[0] = double(scene.lightPickPdf(x0.light)) / double(scene.lights()[x0.light].area);
     Vec3f w = normalize(x[1]->p - x0.p);
-    pL[1] = toAreaDensity(cosineHemispherePdf(dot(x0.n, w)), x0.p, x[1]->p, x[1]->n);
+    pL[1] = toAreaDensity(scene.emissionPdf(x0.light, x0.n, w), x0.p, x[1]->p, x[1]->n);
   }
   for (int i = 2; i < n - 1; ++i) {
     const PathVertex& prev = *x[i - 1];

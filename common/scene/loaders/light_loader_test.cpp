@@ -183,6 +183,19 @@ TEST(PointLightLoader, MitsubaPointAndSpot) {
   EXPECT_EQ(s.falloff, PointLightDescription::Falloff::MitsubaLinearAngle);
 }
 
+TEST(AreaLightLoader, PbrtTwoSided) {
+  TempDir dir;
+  SceneDescription d = loadSceneDescription(
+      dir.write("s.pbrt", pbrtScene("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 2 3] "
+                                    "\"bool twosided\" true\nShape \"sphere\"\nAttributeEnd\n"
+                                    "AreaLightSource \"diffuse\"\nShape \"sphere\"\n")));
+  ASSERT_EQ(d.shapes.size(), 3u);  // the scene's own sphere first
+  EXPECT_TRUE(d.shapes[1].isEmitter);
+  EXPECT_TRUE(d.shapes[1].emitsBothSides);
+  EXPECT_TRUE(d.shapes[2].isEmitter);
+  EXPECT_FALSE(d.shapes[2].emitsBothSides);
+}
+
 TEST(EnvironmentLoader, BadEnvironmentsGetAClearError) {
   TempDir dir;
   writeMap(dir, "square.exr", 4, 4);

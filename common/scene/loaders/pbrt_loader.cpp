@@ -100,6 +100,7 @@ struct Directive {
 struct AreaLight {
   Spectrum radiance{0.0f};
   bool active = false;
+  bool twoSided = false;
 };
 
 struct Attributes {
@@ -1091,8 +1092,7 @@ class PbrtLoader {
     getSpectrum(d, "L", &L);
     double scale = getFloat(d, "scale", 1);
     if (!(scale >= 0)) fail(d, "area light scale must be >= 0");
-    if (getBool(d, "twosided", false))
-      fail(d, "two-sided area lights are not supported yet (emission on the normal's side only)");
+    attrs_.areaLight.twoSided = getBool(d, "twosided", false);
     if (d.params.has("power")) fail(d, "area light 'power' is not supported: give L");
     if (d.params.has("filename")) fail(d, "image area lights are not supported");
     getInt(d, "nsamples", 1);  // v3's sample count: the farm samples its own way
@@ -1185,6 +1185,7 @@ class PbrtLoader {
     if (attrs_.areaLight.active && !isBlack(attrs_.areaLight.radiance)) {
       shape.isEmitter = true;
       shape.radiance = attrs_.areaLight.radiance;
+      shape.emitsBothSides = attrs_.areaLight.twoSided;
     }
     shape.origin =
         fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type;

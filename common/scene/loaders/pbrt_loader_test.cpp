@@ -406,7 +406,6 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
        "alpha cut-outs"},
       {"Shape \"sphere\" \"float zmax\" 0.5\n", 5, "partial spheres"},
       {"Scale 1 2 1\nShape \"sphere\"\n", 6, "non-uniform scale"},
-      {"AreaLightSource \"diffuse\" \"bool twosided\" true\n", 5, "two-sided area lights"},
       {"AreaLightSource \"diffuse\" \"blackbody L\" [6500]\n", 5, "blackbody"},
       {"MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n", 5, "participating media"},
       {"ObjectInstance \"o\"\n", 5, "object 'o' is not defined"},
