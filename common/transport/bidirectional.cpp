@@ -47,13 +47,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
       // density there is the direction's.
       const int environment = scene_.environmentLight();
       if (mode == TransportMode::Radiance && environment >= 0) {
-        v = PathVertex();
-        v.kind = PathVertex::Kind::Light;
-        v.n = v.ns = -ray.d;
-        v.p = ray.o + ray.d * (4 * scene_.extent() + length(ray.o - scene_.center()));
-        v.wo = -ray.d;
-        v.light = environment;
-        v.infinite = true;
+        v = vertexAtInfinity(scene_, environment, ray.o, ray.d);
         v.beta = beta;
         v.pdfFwd = pdfDir;
         ++count;

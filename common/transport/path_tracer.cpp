@@ -37,15 +37,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       const int environment = scene_.environmentLight();
       if (environment < 0) break;
       // The ray leaves the scene: the environment's radiance from its direction.
-      if (vertices) {
-        PathVertex v;
-        v.kind = PathVertex::Kind::Light;
-        v.n = v.ns = -ray.d;
-        v.p = ray.o + ray.d * (4 * scene_.extent() + length(ray.o - scene_.center()));
-        v.light = environment;
-        v.infinite = true;
-        vertices->push_back(v);
-      }
+      if (vertices) vertices->push_back(vertexAtInfinity(scene_, environment, ray.o, ray.d));
       Spectrum Le = scene_.environment()->radiance(ray.d);
       if (!isBlack(Le)) {
         if (previousDelta) {
@@ -131,14 +123,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
             ++rays_;
             if (scene_.escapes(hit.p, hit.ng, wiW)) {
               PathVertex lightVertex;
-              if (vertices) {
-                lightVertex.kind = PathVertex::Kind::Light;
-                lightVertex.n = lightVertex.ns = -wiW;
-                lightVertex.infinite = true;
-                lightVertex.p =
-                    hit.p + wiW * (4 * scene_.extent() + length(hit.p - scene_.center()));
-                lightVertex.light = l;
-              }
+              if (vertices) lightVertex = vertexAtInfinity(scene_, l, hit.p, wiW);
               float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
               add(beta * f * Le * (std::fabs(wi.z) * w / pdfLight), &lightVertex);
             }

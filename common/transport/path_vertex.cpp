@@ -15,6 +15,18 @@ double toAreaDensity(double pdfSolidAngle, const Vec3f& from, const Vec3f& to, c
   return pdfSolidAngle * cosTo / d2;
 }
 
+PathVertex vertexAtInfinity(const Scene& scene, int light, const Vec3f& from, const Vec3f& w) {
+  PathVertex v;
+  v.kind = PathVertex::Kind::Light;
+  v.n = v.ns = -w;
+  // Far beyond the scene along w: never used for directions (directionBetween), only finite.
+  v.p = from + w * (4 * scene.extent() + length(from - scene.center()));
+  v.wo = -w;
+  v.light = light;
+  v.infinite = true;
+  return v;
+}
+
 namespace {
 
 // Solid-angle density of leaving surface vertex v in direction wTo, having arrived from

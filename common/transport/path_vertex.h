@@ -42,6 +42,10 @@ inline bool onPointLight(const PathVertex& v) {
   return v.kind == PathVertex::Kind::Light && v.shape < 0 && !v.infinite;
 }
 
+// The vertex at infinity that a ray from `from` in unit direction w reaches when it leaves the
+// scene: on the environment light `light`, its light travelling along -w.
+PathVertex vertexAtInfinity(const Scene& scene, int light, const Vec3f& from, const Vec3f& w);
+
 // The unit direction from a to b, either of which may lie at infinity.
 inline Vec3f directionBetween(const PathVertex& a, const PathVertex& b) {
   if (atInfinity(a)) return a.n;
