@@ -16,7 +16,7 @@
 #include <pugixml.hpp>
 #include <sstream>
 #include <string_view>
-#include <unordered_map>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -165,6 +165,8 @@ class MitsubaLoader {
         parseShape(child);
       } else if (tag == "emitter") {
         parseTopLevelEmitter(child);
+      } else if (tag == "texture") {
+        registerId(child, "texture", parseTexture(child));
       } else {
         failUnknownElement(child);
       }
@@ -186,8 +188,8 @@ class MitsubaLoader {
     throw SceneLoadError(path_, node ? lineOf(node) : 0, problem);
   }
   [[noreturn]] void failUnknownElement(const pugi::xml_node& node) const {
-    static const char* const kKnownButUnsupported[] = {"texture", "medium", "phase",   "subsurface",
-                                                       "include", "alias",  "default", "volume"};
+    static const char* const kKnownButUnsupported[] = {"medium", "phase",   "subsurface", "include",
+                                                       "alias",  "default", "volume"};
     std::string tag = node.name();
     for (const char* t : kKnownButUnsupported)
       if (tag == t) fail(node, "<" + tag + "> is not supported here");
@@ -287,8 +289,8 @@ class MitsubaLoader {
     ids_.emplace(key, IdEntry{kind, index, lineOf(node)});
   }
 
-  // The bsdf a <ref> names, checking that it is one.
-  int resolveBsdfRef(const pugi::xml_node& ref) {
+  // The object of `kind` ("bsdf", "texture") a <ref> names, checking that it is one.
+  int resolveRef(const pugi::xml_node& ref, const std::string& kind) {
     pugi::xml_attribute id = ref.attribute("id");
     if (!id) fail(ref, "<ref> without an id attribute");
     std::string key = id.value();
@@ -301,13 +303,15 @@ class MitsubaLoader {
                       std::to_string(declared->second) + " (declare objects before using them)");
       fail(ref, "<ref id=\"" + key + "\">: the object declared at line " +
                     std::to_string(declared->second) +
-                    " cannot be referenced (only top-level and shape-level bsdfs can)");
+                    " cannot be referenced (only top-level and shape-level bsdfs and top-level "
+                    "textures can)");
     }
-    if (it->second.kind != "bsdf")
+    if (it->second.kind != kind)
       fail(ref, "<ref id=\"" + key + "\"> names a <" + it->second.kind + "> (line " +
-                    std::to_string(it->second.line) + "), but a <bsdf> is needed here");
+                    std::to_string(it->second.line) + "), but a <" + kind + "> is needed here");
     return it->second.index;
   }
+  int resolveBsdfRef(const pugi::xml_node& ref) { return resolveRef(ref, "bsdf"); }
 
   // ---- Properties ----
 
@@ -818,10 +822,20 @@ class MitsubaLoader {
       rejectUnused(props, what);
       return b;
     }
+    // Textured parameters: <texture name="reflectance" ...> or <ref name="reflectance" id=.../>.
+    // Only a diffuse reflectance may be textured.
+    const char* texturable = type == "diffuse" ? "reflectance" : nullptr;
     for (const pugi::xml_node& child : nested) {
-      if (std::string_view(child.name()) == "texture")
-        fail(child, "textures are not supported (" + what + ")");
-      failUnknownElement(child);
+      std::string_view tag = child.name();
+      if (tag != "texture" && !(tag == "ref" && child.attribute("name"))) failUnknownElement(child);
+      const std::string name = child.attribute("name").as_string();
+      if (name.empty()) fail(child, "a <" + std::string(tag) + "> in a bsdf needs a name");
+      if (!texturable || name != texturable)
+        fail(child, "a textured '" + name + "' is not supported for " + what +
+                        (texturable ? std::string(" (only its ") + texturable + " may be)" : ""));
+      if (props.has(name.c_str()) || b.reflectanceTexture >= 0)
+        fail(child, "parameter '" + name + "' given twice");
+      b.reflectanceTexture = tag == "ref" ? resolveRef(child, "texture") : parseTexture(child);
     }
     if (type == "diffuse") {
       b.type = BsdfDescription::Type::Diffuse;
@@ -852,6 +866,72 @@ class MitsubaLoader {
     }
     rejectUnused(props, what);
     return b;
+  }
+
+  // <texture type="bitmap">: an image looked up bilinearly at the surface's (u, v), scaled and
+  // offset. Mitsuba's row v = 0 is the image's top; the description's (t = 0 at the bottom row)
+  // gets there because every Mitsuba shape's texture coordinates enter it as (u, 1 - v) (see
+  // mitsubaUv), and this mapping is written for those: t = vscale v' + (1 - vscale - voffset).
+  int parseTexture(const pugi::xml_node& node) {
+    std::string type = node.attribute("type").as_string();
+    if (type != "bitmap") fail(node, "unsupported texture type '" + type + "' (bitmap only)");
+    std::vector<pugi::xml_node> nested;
+    PropertySet props = collectProperties(node, &nested);
+    for (const pugi::xml_node& child : nested) failUnknownElement(child);
+    pugi::xml_node fileNode;
+    const std::string filename = getString(props, "filename", "", &fileNode);
+    if (trim(filename).empty()) fail(fileNode ? fileNode : node, "bitmap texture has no filename");
+    TextureDescription t;
+    t.type = TextureDescription::Type::Image;
+    const std::string wrap = getString(props, "wrapMode", "repeat");
+    const std::string wrapU = getString(props, "wrapModeU", wrap);
+    const std::string wrapV = getString(props, "wrapModeV", wrap);
+    if (wrapU != wrapV) fail(node, "different wrap modes in u and v are not supported");
+    if (wrapU == "repeat") {
+      t.wrap = TextureWrap::Repeat;
+    } else if (wrapU == "clamp") {
+      t.wrap = TextureWrap::Clamp;
+    } else if (wrapU == "zero" || wrapU == "black") {
+      t.wrap = TextureWrap::Black;
+    } else {
+      fail(node, "texture wrap mode '" + wrapU + "' is not supported (repeat, clamp, zero)");
+    }
+    TextureEncoding encoding = TextureEncoding::Automatic;
+    if (pugi::xml_node g = props.take("gamma")) {
+      requireTag(g, {"float", "integer"});
+      const double gamma = number(g, requireValue(g), "parameter 'gamma'");
+      if (gamma == -1) {
+        encoding = TextureEncoding::SRGB;
+      } else if (gamma == 1) {
+        encoding = TextureEncoding::Linear;
+      } else if (gamma != 0) {
+        fail(g, "texture gamma " + std::string(requireValue(g)) +
+                    " is not supported (-1 for sRGB, 1 for linear, or leave it out)");
+      }
+    }
+    if (props.has("channel"))
+      fail(props.take("channel"), "single-channel textures are not supported");
+    // EWA and trilinear filtering average the texture over a pixel's footprint; here the pixel
+    // filter and the samples do that.
+    const std::string filter = getString(props, "filterType", "ewa");
+    if (filter != "ewa" && filter != "trilinear" && filter != "nearest")
+      fail(node, "unknown texture filterType '" + filter + "' (ewa, trilinear, nearest)");
+    getNumber(props, "maxAnisotropy", 20);
+    getBoolean(props, "cache", false);
+    const double uvScale = getNumber(props, "uvscale", 1);
+    const double uScale = getNumber(props, "uscale", uvScale);
+    const double vScale = getNumber(props, "vscale", uvScale);
+    const double uOffset = getNumber(props, "uoffset", 0);
+    const double vOffset = getNumber(props, "voffset", 0);
+    rejectUnused(props, "texture type 'bitmap'");
+    t.uScale = float(uScale);
+    t.uOffset = float(uOffset);
+    t.vScale = float(vScale);
+    t.vOffset = float(1 - vScale - vOffset);
+    t.image = images_.load(dir_, filename, encoding, path_, lineOf(fileNode));
+    t.origin = baseName_ + ":" + std::to_string(lineOf(node)) + " (bitmap " + filename + ")";
+    scene_.textures.push_back(std::move(t));
+    return int(scene_.textures.size()) - 1;
   }
 
   int addBsdf(const BsdfDescription& b) {
@@ -987,6 +1067,11 @@ class MitsubaLoader {
       bsdf = addBsdf(def);
     }
     shape.bsdf = bsdf;
+    const bool textured = scene_.bsdfs[size_t(bsdf)].reflectanceTexture >= 0;
+    if (textured && (type == "sphere" || type == "cube"))
+      fail(node, "a textured " + type +
+                     " is not supported (texture coordinates come from meshes "
+                     "and rectangles only)");
 
     Matrix4 toWorld = Matrix4::identity();
     pugi::xml_node transformNode = props.take("toWorld");
@@ -1034,18 +1119,22 @@ class MitsubaLoader {
       if (!fileNode) fail(node, type + " shape without a filename parameter");
       if (trim(filename).empty()) fail(fileNode, "empty " + type + " filename");
       bool faceNormals = getBoolean(props, "faceNormals", false);
+      bool flipTexCoords = true;
       if (type == "obj") {
-        getBoolean(props, "flipTexCoords", true);  // no textures: texture coordinates are unused
-        getBoolean(props, "collapse", false);      // we always merge an OBJ's groups into one mesh
+        flipTexCoords = getBoolean(props, "flipTexCoords", true);
+        getBoolean(props, "collapse", false);  // we always merge an OBJ's groups into one mesh
       } else {
         getBoolean(props, "srgb", true);  // vertex colours: no texture reads them
       }
       rejectUnused(props, what);
       if (type == "obj") {
-        loadObj(fileNode, filename, toWorld, faceNormals, flip, &shape);
+        loadObj(fileNode, filename, toWorld, faceNormals, flip, flipTexCoords, &shape);
       } else {
         loadPly(fileNode, filename, toWorld, faceNormals, flip, &shape);
       }
+      if (textured && shape.uvs.empty())
+        fail(fileNode,
+             type + " '" + filename + "' has a textured material but no texture coordinates");
       shape.origin = origin + " " + filename + ")";
     }
     scene_.shapes.push_back(std::move(shape));
@@ -1067,6 +1156,10 @@ class MitsubaLoader {
     return s;
   }
 
+  // Texture coordinates as the description has them: Mitsuba looks up row v of an image from
+  // its top (its mipmap's evalBilinear), the description from its bottom.
+  static Vec2f mitsubaUv(const Vec2f& uv) { return Vec2f(uv.x, 1 - uv.y); }
+
   static void addQuad(ShapeDescription* shape, const Vec3f corners[4], bool reverse) {
     uint32_t base = uint32_t(shape->positions.size());
     for (int i = 0; i < 4; ++i) shape->positions.push_back(corners[i]);
@@ -1084,6 +1177,9 @@ class MitsubaLoader {
     Vec3f n = normalize(toWorld.inverse().transpose().applyVector(Vec3f(0, 0, 1)));
     if (flip) n = -n;
     shape->normals.assign(4, n);
+    // Mitsuba's (x + 1, y + 1) / 2 at the corners above, as mitsubaUv gives them.
+    const Vec2f mitsuba[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (const Vec2f& uv : mitsuba) shape->uvs.push_back(mitsubaUv(uv));
     shape->faceNormals = false;
   }
 
@@ -1104,8 +1200,9 @@ class MitsubaLoader {
     shape->faceNormals = true;
   }
 
+  // flipTexCoords: Mitsuba's default, v -> 1 - v, for OBJ files whose v runs up the image.
   void loadObj(const pugi::xml_node& fileNode, const std::string& filename, const Matrix4& toWorld,
-               bool faceNormals, bool flip, ShapeDescription* shape) {
+               bool faceNormals, bool flip, bool flipTexCoords, ShapeDescription* shape) {
     const fs::path objPath = sceneFilePath(dir_, filename, "mesh file", path_, lineOf(fileNode));
 
     tinyobj::ObjReaderConfig config;
@@ -1125,6 +1222,7 @@ class MitsubaLoader {
     const tinyobj::attrib_t& attrib = reader.GetAttrib();
     const size_t numPositions = attrib.vertices.size() / 3;
     const size_t numNormals = attrib.normals.size() / 3;
+    const size_t numTexcoords = attrib.texcoords.size() / 2;
 
     // Corners of all groups, in order; the file's normals only if every corner has one.
     std::vector<tinyobj::index_t> corners;
@@ -1138,38 +1236,55 @@ class MitsubaLoader {
     }
     if (corners.empty()) fail(fileNode, "OBJ '" + filename + "' contains no triangles");
     bool fileNormals = !faceNormals && numNormals > 0;
+    bool fileTexcoords = numTexcoords > 0;
     for (const tinyobj::index_t& c : corners) {
       if (c.vertex_index < 0 || size_t(c.vertex_index) >= numPositions)
         fail(fileNode, "OBJ '" + filename + "' has a face with an invalid vertex index");
       if (c.normal_index < 0 || size_t(c.normal_index) >= numNormals) fileNormals = false;
+      if (c.texcoord_index < 0 || size_t(c.texcoord_index) >= numTexcoords) fileTexcoords = false;
     }
 
-    // One vertex per distinct (position, normal) pair, as the file shares them.
-    std::unordered_map<uint64_t, uint32_t> vertexOf;
-    std::vector<std::pair<int, int>> sources;  // (position index, normal index or -1)
+    // One vertex per distinct (position, normal, texture coordinate), as the file shares them.
+    struct Source {
+      int position, normal, texcoord;  // -1: none
+      bool operator<(const Source& o) const {
+        return std::tie(position, normal, texcoord) < std::tie(o.position, o.normal, o.texcoord);
+      }
+    };
+    std::map<Source, uint32_t> vertexOf;
+    std::vector<Source> sources;
     shape->indices.reserve(corners.size());
     for (const tinyobj::index_t& c : corners) {
-      int ni = fileNormals ? c.normal_index : -1;
-      uint64_t key = (uint64_t(uint32_t(c.vertex_index)) << 32) | uint32_t(ni);
+      const Source key{c.vertex_index, fileNormals ? c.normal_index : -1,
+                       fileTexcoords ? c.texcoord_index : -1};
       auto [it, inserted] = vertexOf.emplace(key, uint32_t(sources.size()));
-      if (inserted) sources.emplace_back(c.vertex_index, ni);
+      if (inserted) sources.push_back(key);
       shape->indices.push_back(it->second);
     }
 
     std::vector<Vec3f> positions(sources.size()), normals;
+    std::vector<Vec2f> uvs;
     for (size_t i = 0; i < sources.size(); ++i) {
-      const float* p = &attrib.vertices[3 * size_t(sources[i].first)];
+      const float* p = &attrib.vertices[3 * size_t(sources[i].position)];
       positions[i] = Vec3f(p[0], p[1], p[2]);
     }
     if (fileNormals) {
       normals.resize(sources.size());
       for (size_t i = 0; i < sources.size(); ++i) {
-        const float* n = &attrib.normals[3 * size_t(sources[i].second)];
+        const float* n = &attrib.normals[3 * size_t(sources[i].normal)];
         normals[i] = Vec3f(n[0], n[1], n[2]);
       }
     }
+    if (fileTexcoords) {
+      uvs.resize(sources.size());
+      for (size_t i = 0; i < sources.size(); ++i) {
+        const float* t = &attrib.texcoords[2 * size_t(sources[i].texcoord)];
+        const Vec2f uv(t[0], flipTexCoords ? 1 - t[1] : t[1]);
+        uvs[i] = mitsubaUv(uv);
+      }
+    }
     finishMesh(path_, lineOf(fileNode), "OBJ '" + filename + "'", toWorld, faceNormals, flip,
-               std::move(positions), std::move(normals), {}, shape, &scene_.warnings);
+               std::move(positions), std::move(normals), std::move(uvs), shape, &scene_.warnings);
   }
 
   // A PLY mesh through Open Asset Import Library (ply_reader.h).
@@ -1185,6 +1300,7 @@ class MitsubaLoader {
       fail(fileNode, "cannot read PLY '" + filename + "': " + e.what());
     }
     shape->indices = std::move(mesh.indices);
+    for (Vec2f& uv : mesh.uvs) uv = mitsubaUv(uv);
     finishMesh(path_, lineOf(fileNode), "PLY '" + filename + "'", toWorld, faceNormals, flip,
                std::move(mesh.positions), std::move(mesh.normals), std::move(mesh.uvs), shape,
                &scene_.warnings);
@@ -1199,6 +1315,7 @@ class MitsubaLoader {
   SceneDescription scene_;
   std::map<std::string, IdEntry> ids_;
   std::map<std::string, int> declaredIds_;  // id -> line, over the whole document
+  TextureImageCache images_;
 };
 
 }  // namespace

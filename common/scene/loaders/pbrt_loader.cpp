@@ -118,10 +118,9 @@ struct NamedTexture {
   int errorLine = 0;
 };
 
-constexpr int kMaxTextureDepth = 16;             // nesting of checkerboard and scale textures
-constexpr size_t kMaxTextures = 100000;          // entries in SceneDescription::textures
-constexpr int kMaxIncludedFiles = 1000;          // Include and Import directives in all
-constexpr long long kMaxTexelBytes = 4ll << 30;  // decoded texture storage of a scene
+constexpr int kMaxTextureDepth = 16;     // nesting of checkerboard and scale textures
+constexpr size_t kMaxTextures = 100000;  // entries in SceneDescription::textures
+constexpr int kMaxIncludedFiles = 1000;  // Include and Import directives in all
 constexpr size_t kMaxGeometryElements = size_t(1) << 28;  // vertices + triangle corners
 
 class PbrtLoader {
@@ -871,26 +870,8 @@ class PbrtLoader {
                     "average the texture over each pixel");
       readMapping(d, &t);
       rejectUnused(d, what);
-      const fs::path path = sceneFilePath(dir_, filename, "texture", d.file, d.line);
-      const std::string key =
-          path.lexically_normal().string() + "|" + std::to_string(int(encoding));
-      auto cached = images_.find(key);
-      if (cached == images_.end()) {
-        std::string bytes = readSceneFile(path, "texture '" + filename + "'", d.file, d.line);
-        std::shared_ptr<TextureImage> image;
-        try {
-          image = readTextureImage(bytes, filename, encoding);
-        } catch (const std::exception& e) {
-          fail(d, "cannot read texture '" + filename + "': " + e.what());
-        }
-        texelBytes_ += (long long)(image->bytes.size() + image->floats.size() * sizeof(float));
-        if (texelBytes_ > kMaxTexelBytes)
-          fail(d, "the scene's textures take more than " + std::to_string(kMaxTexelBytes >> 30) +
-                      " GiB decoded");
-        cached = images_.emplace(key, std::move(image)).first;
-      }
       t.type = TextureDescription::Type::Image;
-      t.image = cached->second;
+      t.image = images_.load(dir_, filename, encoding, d.file, d.line);
       t.origin = fs::path(d.file).filename().string() + ":" + std::to_string(d.line) +
                  " (imagemap " + filename + ")";
       result = addTexture(std::move(t));
@@ -1434,9 +1415,8 @@ class PbrtLoader {
   std::map<std::string, Matrix4> namedCoordinateSystems_;
   std::map<std::string, int> namedMaterials_;
   std::map<std::string, NamedTexture> spectrumTextures_, floatTextures_;
-  std::map<std::string, std::shared_ptr<TextureImage>> images_;
+  TextureImageCache images_;
   std::vector<int> textureDepth_;  // per texture: 1 + its deepest child's
-  long long texelBytes_ = 0;
   size_t geometryElements_ = 0;
   int includedFiles_ = 0;
   std::vector<std::string> includeStack_;

@@ -209,3 +209,30 @@ EnvironmentDescription makeEnvironment(const fs::path& dir, const std::string& f
 }
 
 }  // namespace farm
+
+namespace farm {
+
+std::shared_ptr<const TextureImage> TextureImageCache::load(const fs::path& sceneDir,
+                                                            const std::string& filename,
+                                                            TextureEncoding encoding,
+                                                            const std::string& file, int line) {
+  const fs::path path = sceneFilePath(sceneDir, filename, "texture", file, line);
+  const std::string key = path.lexically_normal().string() + "|" + std::to_string(int(encoding));
+  auto cached = images_.find(key);
+  if (cached != images_.end()) return cached->second;
+  const std::string bytes = readSceneFile(path, "texture '" + filename + "'", file, line);
+  std::shared_ptr<TextureImage> image;
+  try {
+    image = readTextureImage(bytes, filename, encoding);
+  } catch (const std::exception& e) {
+    throw SceneLoadError(file, line, "cannot read texture '" + filename + "': " + e.what());
+  }
+  texelBytes_ += (long long)(image->bytes.size() + image->floats.size() * sizeof(float));
+  if (texelBytes_ > kMaxTexelBytes)
+    throw SceneLoadError(file, line,
+                         "the scene's textures take more than " +
+                             std::to_string(kMaxTexelBytes >> 30) + " GiB decoded");
+  return images_.emplace(key, std::move(image)).first->second;
+}
+
+}  // namespace farm

@@ -2,11 +2,14 @@
 // What the scene loaders (Mitsuba XML, pbrt) share: their error, the rule for files a scene
 // names (meshes, textures), and the one path every mesh file's triangles take to world space.
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "common/math/transform.h"
+#include "common/scene/loaders/image_reader.h"
 #include "common/scene/scene_description.h"
 
 namespace farm {
@@ -44,6 +47,23 @@ std::string readSceneText(const std::string& path);
 // scene names, so no reader ever opens one the scene's folder does not hold.
 std::string readSceneFile(const std::filesystem::path& path, const std::string& what,
                           const std::string& file, int line);
+
+// The texture images of one scene, read once however many textures name them (with the same
+// encoding), and within a budget of decoded bytes: a small scene file may name a large image
+// many times, or many large images.
+class TextureImageCache {
+ public:
+  static constexpr long long kMaxTexelBytes = 4ll << 30;
+  // The image `filename` names (through sceneFilePath, as a "texture"); SceneLoadErrors at
+  // file:line when it is missing, unreadable, or over the budget.
+  std::shared_ptr<const TextureImage> load(const std::filesystem::path& sceneDir,
+                                           const std::string& filename, TextureEncoding encoding,
+                                           const std::string& file, int line);
+
+ private:
+  std::map<std::string, std::shared_ptr<const TextureImage>> images_;
+  long long texelBytes_ = 0;
+};
 
 // What every mesh read from a file goes through (`shape->indices` set; positions, normals and
 // texture coordinates in the file's order, normals and uvs empty when the file has none): to
