@@ -22,6 +22,7 @@
 
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/scene_files.h"
+#include "common/scene/loaders/serialized_reader.h"
 #include "common/scene/mesh_cleanup.h"
 
 namespace farm {
@@ -1027,9 +1028,10 @@ class MitsubaLoader {
 
   void parseShape(const pugi::xml_node& node) {
     std::string type = node.attribute("type").as_string();
-    if (type != "rectangle" && type != "cube" && type != "sphere" && type != "obj" && type != "ply")
+    if (type != "rectangle" && type != "cube" && type != "sphere" && type != "obj" &&
+        type != "ply" && type != "serialized")
       fail(node, "unknown or unsupported shape type '" + type +
-                     "' (supported: rectangle, cube, sphere, obj, ply)");
+                     "' (supported: rectangle, cube, sphere, obj, ply, serialized)");
     std::vector<pugi::xml_node> nested;
     PropertySet props = collectProperties(node, &nested);
     ShapeDescription shape;
@@ -1120,17 +1122,26 @@ class MitsubaLoader {
       if (trim(filename).empty()) fail(fileNode, "empty " + type + " filename");
       bool faceNormals = getBoolean(props, "faceNormals", false);
       bool flipTexCoords = true;
+      long long shapeIndex = 0;
       if (type == "obj") {
         flipTexCoords = getBoolean(props, "flipTexCoords", true);
         getBoolean(props, "collapse", false);  // we always merge an OBJ's groups into one mesh
-      } else {
+      } else if (type == "ply") {
         getBoolean(props, "srgb", true);  // vertex colours: no texture reads them
+      } else if (pugi::xml_node n = props.take("shapeIndex")) {
+        shapeIndex = getIntegerFrom(n, "shapeIndex");
+        if (shapeIndex < 0 || shapeIndex > std::numeric_limits<int>::max())
+          fail(n, "shapeIndex must be >= 0");
       }
+      if (pugi::xml_node n = props.take("maxSmoothAngle"))
+        fail(n, "maxSmoothAngle (normals rebuilt at creases) is not supported");
       rejectUnused(props, what);
       if (type == "obj") {
         loadObj(fileNode, filename, toWorld, faceNormals, flip, flipTexCoords, &shape);
-      } else {
+      } else if (type == "ply") {
         loadPly(fileNode, filename, toWorld, faceNormals, flip, &shape);
+      } else {
+        loadSerialized(fileNode, filename, int(shapeIndex), toWorld, faceNormals, flip, &shape);
       }
       if (textured && shape.uvs.empty())
         fail(fileNode,
@@ -1305,6 +1316,29 @@ class MitsubaLoader {
                std::move(mesh.positions), std::move(mesh.normals), std::move(mesh.uvs), shape,
                &scene_.warnings);
   }
+
+  // One mesh of a Mitsuba serialized file (serialized_reader.h); the file's face-normal flag
+  // acts as faceNormals does.
+  void loadSerialized(const pugi::xml_node& fileNode, const std::string& filename, int shapeIndex,
+                      const Matrix4& toWorld, bool faceNormals, bool flip,
+                      ShapeDescription* shape) {
+    const std::string bytes =
+        readSceneFile(sceneFilePath(dir_, filename, "mesh file", path_, lineOf(fileNode)),
+                      "serialized mesh '" + filename + "'", path_, lineOf(fileNode));
+    SerializedMesh mesh;
+    try {
+      mesh = parseSerialized(bytes, shapeIndex, kMaxMeshElements);
+    } catch (const std::exception& e) {
+      fail(fileNode, "cannot read serialized mesh '" + filename + "': " + e.what());
+    }
+    shape->indices = std::move(mesh.indices);
+    for (Vec2f& uv : mesh.uvs) uv = mitsubaUv(uv);
+    finishMesh(path_, lineOf(fileNode), "serialized mesh '" + filename + "'", toWorld,
+               faceNormals || mesh.faceNormals, flip, std::move(mesh.positions),
+               std::move(mesh.normals), std::move(mesh.uvs), shape, &scene_.warnings);
+  }
+
+  static constexpr size_t kMaxMeshElements = size_t(1) << 28;  // vertices + triangle corners
 
   std::string path_;
   fs::path dir_;

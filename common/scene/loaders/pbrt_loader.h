@@ -12,8 +12,8 @@
 // remaproughness (v3's polynomial, v4's square root, told by the material's name), v3's plastic;
 // Texture imagemap, checkerboard, scale and constant with uv mapping; Shape trianglemesh, plymesh,
 // sphere, disk (tessellated) and planar bilinear patches; ObjectBegin/End and ObjectInstance
-// (flattened: each instance copies its object's shapes); AreaLightSource diffuse (one- or two-sided);
-// LightSource infinite (constant or a lat-long map), point and spot.
+// (flattened: each instance copies its object's shapes); AreaLightSource diffuse (one- or
+// two-sided); LightSource infinite (constant or a lat-long map), point and spot.
 //
 // Everything else that would change the picture is an error naming file, line and what is not
 // supported. Meshes, textures and included files must be inside the scene's folder.

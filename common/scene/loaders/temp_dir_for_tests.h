@@ -1,11 +1,16 @@
 #pragma once
 // A fresh directory for the loaders' tests to write small scene files into; removed with it.
+// And the check every loader error test makes.
+#include <gtest/gtest.h>
 #include <stdlib.h>
 
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <string>
+
+#include "common/scene/loaders/mitsuba_loader.h"
+#include "common/scene/loaders/scene_files.h"
 
 namespace farm {
 
@@ -34,5 +39,17 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// That loading the Mitsuba scene at `path` fails at `line` with a message containing `message`.
+inline void expectMitsubaLoadError(const std::string& path, const std::string& message, int line) {
+  try {
+    loadMitsubaScene(path);
+    ADD_FAILURE() << "accepted a scene that should fail with: " << message;
+  } catch (const SceneLoadError& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
+        << e.what() << "\n  wanted: " << message;
+    EXPECT_EQ(e.line(), line) << e.what();
+  }
+}
 
 }  // namespace farm
