@@ -13,6 +13,7 @@
 
 #include "common/render/image_agreement.h"
 #include "common/render/local_render.h"
+#include "common/scene/bsdf.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/scene.h"
 #include "common/scene/test_scenes.h"
@@ -33,13 +34,24 @@ ShapeDescription sphere(const Vec3f& center, float radius, int bsdf) {
 
 // A camera at the origin looking down +z (or -z, at nothing but sky) at a large sphere that
 // fills its view, and optionally a small one in front of it that the two reflect between.
-SceneDescription skyFurnace(float albedo, bool smallSphere, bool lookAway = false) {
+// coated: the spheres are white under a clear coat of roughness 1e-3 (Mitsuba's roughplastic),
+// which loses no energy either: what the coat does not reflect, the base returns through it.
+SceneDescription skyFurnace(float albedo, bool smallSphere, bool lookAway = false,
+                            bool coated = false) {
   SceneDescription d;
   d.camera.toWorld = lookAway ? Matrix4::rotate(Vec3f(0, 1, 0), 180) : Matrix4::identity();
   d.camera.fovDegrees = 60;
   d.camera.width = d.camera.height = 24;
   BsdfDescription b;
   b.reflectance = Spectrum(albedo);
+  if (coated) {
+    b.type = BsdfDescription::Type::CoatedDiffuse;
+    b.distribution = MicrofacetDistribution::GGX;
+    b.alpha = 1e-3f;
+    b.intIOR = 1.5f;
+    b.extIOR = 1;
+    b.coating = sharedCoatingTransmittance(b.distribution, b.alpha, b.intIOR);
+  }
   d.bsdfs.push_back(b);
   d.shapes.push_back(sphere(Vec3f(0, 0, 6), 4.5f, 0));  // 48.6 degrees wide: the whole view
   if (smallSphere) d.shapes.push_back(sphere(Vec3f(0.3f, 0.2f, 1.1f), 0.25f, 0));
@@ -76,6 +88,8 @@ void expectSkyFurnaces(Algorithm algorithm) {
   expectUniformImage(algorithm, skyFurnace(1.0f, true), 1.0f, "white furnace of two spheres");
   expectUniformImage(algorithm, skyFurnace(0.6f, false), 0.6f, "lone sphere of albedo 0.6");
   expectUniformImage(algorithm, skyFurnace(0.6f, false, true), 1.0f, "the sky seen directly");
+  expectUniformImage(algorithm, skyFurnace(1.0f, true, false, true), 1.0f,
+                     "white furnace of two coated spheres");
 }
 
 TEST(Environment, ConstantSkyPathTracing) {
@@ -96,7 +110,7 @@ TEST(Environment, ConstantSkyMultiplexed) {
 
 // A diffuse floor, a glossy (plastic) ball and a diffuse one on it, under the image sky with its
 // sun behind the camera's left; the camera sees floor, balls and sky.
-SceneDescription imageSkyScene() {
+SceneDescription imageSkyScene(bool equalArea = false) {
   SceneDescription d;
   d.camera.toWorld = Matrix4::lookAt(Vec3f(0, 1.2f, -1), Vec3f(0, 0.2f, 3), Vec3f(0, 1, 0));
   d.camera.fovDegrees = 70;
@@ -122,38 +136,48 @@ SceneDescription imageSkyScene() {
   d.shapes.push_back(sphere(Vec3f(-0.5f, 0.6f, 3), 0.6f, 1));
   d.shapes.push_back(sphere(Vec3f(0.9f, 0.4f, 2.4f), 0.4f, 0));
   d.environment.present = true;
-  d.environment.image = latLongSky(40);
+  d.environment.image = equalArea ? equalAreaSky() : latLongSky(40);
+  if (equalArea) d.environment.mapping = EnvironmentDescription::Mapping::EqualArea;
   d.environment.toWorld = Matrix4::rotate(Vec3f(1, 0, 0), -90);  // the map's z up is world y
   d.maxDepth = 6;
   return d;
 }
 
-Image renderSky(Algorithm algorithm, int64_t budget, uint64_t seed, double* zRel = nullptr) {
+Image renderSky(Algorithm algorithm, int64_t budget, uint64_t seed, double* zRel = nullptr,
+                bool equalArea = false) {
   RenderSettings s;
   s.algorithm = algorithm;
   s.samplesPerPixel = budget;
   s.mutationsPerPixel = budget;
   s.seed = seed;
-  RenderJob job(std::make_shared<Scene>(imageSkyScene()), s, "image-sky");
+  RenderJob job(std::make_shared<Scene>(imageSkyScene(equalArea)), s, "image-sky");
   LocalRenderResult r = renderLocally(job);
   EXPECT_EQ(r.rejected.total(), 0);
   if (zRel) *zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
   return r.image;
 }
 
-TEST(Environment, ImageSkyPathTracingAndBidirectionalAgree) {
-  Image pt[2] = {renderSky(Algorithm::PathTracing, 256, 1),
-                 renderSky(Algorithm::PathTracing, 256, 2)};
-  Image bd[2] = {renderSky(Algorithm::Bidirectional, 64, 3),
-                 renderSky(Algorithm::Bidirectional, 64, 4)};
+// PT and BDPT under the image sky (lat-long or equal-area), each as two independent images.
+void expectPathTracingAndBidirectionalAgree(bool equalArea) {
+  Image pt[2] = {renderSky(Algorithm::PathTracing, 256, 1, nullptr, equalArea),
+                 renderSky(Algorithm::PathTracing, 256, 2, nullptr, equalArea)};
+  Image bd[2] = {renderSky(Algorithm::Bidirectional, 64, 3, nullptr, equalArea),
+                 renderSky(Algorithm::Bidirectional, 64, 4, nullptr, equalArea)};
   const Agreement g = compare(pt, bd);
   EXPECT_GT(g.meanA, 0.05);
   EXPECT_NEAR(g.meanA, g.meanB, 4 * g.se);
   EXPECT_LT(g.ratio, 1.3);
-  std::printf(
-      "image sky: means pt %.4f bdpt %.4f (se %.4f), squared differences over "
-      "variance %.3f\n",
-      g.meanA, g.meanB, g.se, g.ratio);
+  std::printf("%s sky: means pt %.4f bdpt %.4f (se %.4f), squared differences over variance %.3f\n",
+              equalArea ? "equal-area" : "image", g.meanA, g.meanB, g.se, g.ratio);
+}
+
+TEST(Environment, ImageSkyPathTracingAndBidirectionalAgree) {
+  expectPathTracingAndBidirectionalAgree(false);
+}
+
+// pbrt-v4's equal-area map, sampled and looked up through its own mapping.
+TEST(Environment, EqualAreaSkyPathTracingAndBidirectionalAgree) {
+  expectPathTracingAndBidirectionalAgree(true);
 }
 
 void expectChainAgreesWithPathTracing(Algorithm algorithm) {

@@ -1,6 +1,12 @@
 #include "common/scene/bsdf.h"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <tuple>
 
 #include "common/sampling/warp.h"
 
@@ -192,9 +198,26 @@ Spectrum fresnelConductor(float cosThetaI, const Spectrum& eta, const Spectrum& 
 
 Bsdf::Bsdf(const BsdfDescription& desc) : desc_(desc), type_(desc.type) {
   // Scene::bsdfAt copies a Bsdf for every shading point of a textured material; without the
-  // name, that copy never allocates.
+  // name, that copy never allocates, and without the shared coating it touches no shared count.
   desc_.id.clear();
   desc_.id.shrink_to_fit();
+  if (type_ == BsdfDescription::Type::CoatedDiffuse) {
+    if (!desc.coating)
+      throw std::invalid_argument("a coated diffuse BSDF needs its coating transmittance");
+    coatingShare_ = desc.coating;
+    coating_ = coatingShare_.get();
+  }
+  desc_.coating.reset();
+}
+
+Bsdf::Bsdf(const Bsdf& other) : desc_(other.desc_), type_(other.type_), coating_(other.coating_) {}
+
+Bsdf& Bsdf::operator=(const Bsdf& other) {
+  desc_ = other.desc_;
+  type_ = other.type_;
+  coating_ = other.coating_;
+  coatingShare_.reset();
+  return *this;
 }
 
 void Bsdf::setReflectance(const Spectrum& reflectance) {
@@ -212,6 +235,7 @@ bool Bsdf::isBlack() const {
     case BsdfDescription::Type::RoughDielectric:
       return false;
     case BsdfDescription::Type::Plastic:
+    case BsdfDescription::Type::CoatedDiffuse:
       return farm::isBlack(desc_.reflectance) && farm::isBlack(desc_.specularReflectance);
   }
   return false;
@@ -224,6 +248,30 @@ bool Bsdf::isBlack() const {
 float Bsdf::plasticDiffuseProbability() const {
   const float d = luminance(desc_.reflectance), g = luminance(desc_.specularReflectance);
   return d + g > 0 ? d / (d + g) : 0.5f;
+}
+
+// The coated base (Mitsuba's roughplastic; Weidlich and Wilkie 2007 for the smooth case): light
+// enters through the coat (T(mu_i)), reaches the Lambertian base, bounces between base and coat
+// (each time the coat reflects Fdr of it back down: the geometric series 1 / (1 - rho Fdr), or
+// Mitsuba's default 1 / (1 - Fdr), which keeps the base's colour), leaves through the coat
+// (T(mu_o)); the radiance inside is eta^2 times that outside, hence the 1 / eta^2.
+Spectrum Bsdf::coatedBase(const Vec3f& wo, const Vec3f& wi) const {
+  const float eta = desc_.intIOR / desc_.extIOR;
+  const float fdr = coating_->internalDiffuseReflectance();
+  const Spectrum& rho = desc_.reflectance;
+  Spectrum base;
+  for (int c = 0; c < 3; ++c) base[c] = rho[c] / (1 - (desc_.nonlinear ? rho[c] : 1.0f) * fdr);
+  return base * (coating_->fromOutside(wo.z) * coating_->fromOutside(wi.z) * kInvPi / (eta * eta));
+}
+
+// Mitsuba's choice: the coat's own reflectance 1 - T(mu_o) against what it lets through,
+// weighted by the lobes' reflectances.
+float Bsdf::coatedGlossyProbability(const Vec3f& wo) const {
+  const float g = luminance(desc_.specularReflectance), d = luminance(desc_.reflectance);
+  if (d <= 0) return 1;
+  if (g <= 0) return 0;
+  const float s = g / (g + d), r = 1 - coating_->fromOutside(wo.z);
+  return s * r / (s * r + (1 - s) * (1 - r));
 }
 
 Spectrum Bsdf::plasticGlossy(const Vec3f& wo, const Vec3f& wi) const {
@@ -371,6 +419,9 @@ Spectrum Bsdf::eval(const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) co
     case BsdfDescription::Type::Plastic:
       if (wo.z <= 0 || wi.z <= 0) return Spectrum(0.0f);
       return desc_.reflectance * kInvPi + plasticGlossy(wo, wi);
+    case BsdfDescription::Type::CoatedDiffuse:
+      if (wo.z <= 0 || wi.z <= 0) return Spectrum(0.0f);
+      return coatedBase(wo, wi) + plasticGlossy(wo, wi);
     case BsdfDescription::Type::Dielectric:
     case BsdfDescription::Type::Conductor:
       return Spectrum(0.0f);
@@ -396,9 +447,11 @@ float Bsdf::pdf(const Vec3f& woIn, const Vec3f& wiIn) const {
     }
     case BsdfDescription::Type::RoughDielectric:
       return roughDielectricPdf(wo, wi);
-    case BsdfDescription::Type::Plastic: {
+    case BsdfDescription::Type::Plastic:
+    case BsdfDescription::Type::CoatedDiffuse: {
       if (wo.z <= 0 || wi.z <= 0) return 0;
-      const float pd = plasticDiffuseProbability();
+      const float pd = type_ == BsdfDescription::Type::Plastic ? plasticDiffuseProbability()
+                                                               : 1 - coatedGlossyProbability(wo);
       float pdf = pd * cosineHemispherePdf(wi.z);
       Vec3f h;
       if (reflectionHalfVector(wo, wi, &h))
@@ -456,10 +509,13 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
     }
     case BsdfDescription::Type::RoughDielectric:
       return roughDielectricSample(wo, u, mode, out);
-    case BsdfDescription::Type::Plastic: {
+    case BsdfDescription::Type::Plastic:
+    case BsdfDescription::Type::CoatedDiffuse: {
       if (wo.z <= 0) return false;
+      const float pd = type_ == BsdfDescription::Type::Plastic ? plasticDiffuseProbability()
+                                                               : 1 - coatedGlossyProbability(wo);
       Vec3f wi;
-      if (u[0] < plasticDiffuseProbability()) {
+      if (u[0] < pd) {
         wi = squareToCosineHemisphere({u[1], u[2]});
       } else {
         const Vec3f m = sampleFacet(desc_.distribution, desc_.alpha, wo, u[1], u[2]);
@@ -555,6 +611,73 @@ float Bsdf::diracJacobian(const Vec3f& a, const Vec3f& b) const {
   const float etaA = a.z > 0 ? desc_.extIOR : desc_.intIOR;
   const float etaB = b.z > 0 ? desc_.extIOR : desc_.intIOR;
   return (etaB * etaB * std::fabs(b.z)) / (etaA * etaA * std::fabs(a.z));
+}
+
+namespace {
+
+// T(mu) by quadrature over the facets sampleFacet draws for wo (the midpoints of an n x n grid
+// of its two numbers): each facet refracts the share 1 - F(wo.m) of what it receives, and what
+// is left of the refraction's f |cos| / pdf once D, the Fresnel choice and the Jacobians cancel
+// is facetWeight; in energy (importance) form, with no eta^2 compression. So this is the mean
+// weight of roughDielectricSample's refractions in importance form, computed without it.
+double coatTransmittance(MicrofacetDistribution dist, float alpha, float eta, float mu, int n) {
+  if (mu <= 0) return 0;
+  const Vec3f wo(std::sqrt(std::max(0.0f, 1 - mu * mu)), 0, mu);
+  double sum = 0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const Vec3f m = sampleFacet(dist, alpha, wo, (i + 0.5f) / n, (j + 0.5f) / n);
+      const float woh = dot(wo, m);
+      if (woh <= 0) continue;
+      float cosT;
+      const float f = fresnelDielectric(woh, eta, &cosT);
+      if (f >= 1) continue;
+      const Vec3f wi = refractedAbout(wo, m, eta, cosT);
+      if (wi.z >= 0) continue;
+      sum += (1 - f) * facetWeight(dist, alpha, wo, wi, m);
+    }
+  }
+  return sum / (double(n) * n);
+}
+
+constexpr int kCoatQuadrature = 32;  // facets per axis and table entry
+
+}  // namespace
+
+CoatingTransmittance::CoatingTransmittance(MicrofacetDistribution dist, float alpha, float eta) {
+  if (!(alpha > 0) || !(eta > 0) || eta == 1 || !std::isfinite(alpha) || !std::isfinite(eta))
+    throw std::invalid_argument("a coating needs alpha > 0 and a relative index > 0, != 1");
+  outside_.resize(kResolution);
+  double inside = 0;  // 2 \int T_in(mu) mu dmu by the trapezoid rule over the same mu
+  for (int k = 0; k < kResolution; ++k) {
+    const float mu = float(k) / (kResolution - 1);
+    outside_[size_t(k)] = float(coatTransmittance(dist, alpha, eta, mu, kCoatQuadrature));
+    const double weight = (k == 0 || k == kResolution - 1) ? 0.5 : 1.0;
+    inside += weight * 2 * mu * coatTransmittance(dist, alpha, 1 / eta, mu, kCoatQuadrature);
+  }
+  inside /= (kResolution - 1);
+  internalDiffuseReflectance_ = float(1 - inside);
+}
+
+std::shared_ptr<const CoatingTransmittance> sharedCoatingTransmittance(MicrofacetDistribution dist,
+                                                                       float alpha, float eta) {
+  static std::mutex mutex;
+  static std::map<std::tuple<int, float, float>, std::weak_ptr<const CoatingTransmittance>> shared;
+  const std::lock_guard<std::mutex> lock(mutex);
+  const auto key = std::make_tuple(int(dist), alpha, eta);
+  if (auto alive = shared[key].lock()) return alive;
+  for (auto it = shared.begin(); it != shared.end();)  // forget the dead ones
+    it = it->second.expired() ? shared.erase(it) : std::next(it);
+  auto made = std::make_shared<const CoatingTransmittance>(dist, alpha, eta);
+  shared[key] = made;
+  return made;
+}
+
+float CoatingTransmittance::lookup(const std::vector<float>& table, float mu) {
+  const float x = std::clamp(mu, 0.0f, 1.0f) * (kResolution - 1);
+  const int k = std::min(int(x), kResolution - 2);
+  const float t = x - float(k);
+  return (1 - t) * table[size_t(k)] + t * table[size_t(k) + 1];
 }
 
 }  // namespace farm

@@ -2,6 +2,9 @@
 // Surface scattering in the local shading frame (z = normal). Directions point away from the
 // surface: wo towards the previous vertex of the path being built, wi the sampled (or connected)
 // next one. A small closed set of models, dispatched by type: what the Mitsuba scenes use.
+#include <memory>
+#include <vector>
+
 #include "common/math/vec.h"
 #include "common/scene/scene_description.h"
 
@@ -17,9 +20,47 @@ struct BsdfSample {
   bool delta = false;  // sampled from a Dirac lobe: cannot be evaluated or connected to
 };
 
+// The share of the power arriving at a rough dielectric boundary from a direction of cosine mu
+// (on either side) that it transmits, T(mu), as Mitsuba's roughplastic uses it (its
+// RoughTransmittance): the directional albedo of the boundary's transmission lobe, for one
+// distribution, roughness and relative index. Tabulated at construction by a quadrature over
+// the microfacet normals the rough dielectric samples; looked up linearly in mu.
+class CoatingTransmittance {
+ public:
+  // eta: the index of the coat over that of the outside (> 0, != 1).
+  CoatingTransmittance(MicrofacetDistribution dist, float alpha, float eta);
+  // T(mu) for light arriving from outside, mu in [0, 1].
+  float fromOutside(float mu) const { return lookup(outside_, mu); }
+  // The share of diffuse light inside the coat that it reflects back in: 1 - 2 \int T_in(mu) mu
+  // dmu, with T_in the transmittance from inside (Mitsuba's Fdr).
+  float internalDiffuseReflectance() const { return internalDiffuseReflectance_; }
+
+  static constexpr int kResolution = 64;  // table entries over mu in [0, 1]
+
+ private:
+  static float lookup(const std::vector<float>& table, float mu);
+  std::vector<float> outside_;
+  float internalDiffuseReflectance_ = 0;
+};
+
+// The coating for these parameters, shared by every description alive that asked for the same
+// ones (a scene's many plastics of one kind tabulate it once); freed with the last of them.
+std::shared_ptr<const CoatingTransmittance> sharedCoatingTransmittance(MicrofacetDistribution dist,
+                                                                       float alpha, float eta);
+
 class Bsdf {
  public:
+  // A CoatedDiffuse description must carry its coating, which this Bsdf then shares. A copy of a
+  // Bsdf is a view: it points at the coating without sharing it, so it must not outlive the Bsdf
+  // it was copied from (Scene::bsdfAt copies one per shading point, from Bsdfs the Scene keeps;
+  // a shared count changed by every thread at once would be a contended cache line). Moves
+  // move the share.
   explicit Bsdf(const BsdfDescription& desc);
+  Bsdf(const Bsdf& other);
+  Bsdf& operator=(const Bsdf& other);
+  Bsdf(Bsdf&&) noexcept = default;
+  Bsdf& operator=(Bsdf&&) noexcept = default;
+  ~Bsdf() = default;
 
   // f(wo, wi) without the cosine; zero for delta lobes.
   Spectrum eval(const Vec3f& wo, const Vec3f& wi, TransportMode mode) const;
@@ -48,7 +89,7 @@ class Bsdf {
   // sides). It converts a delta function in one direction into one in the other.
   float diracJacobian(const Vec3f& a, const Vec3f& b) const;
   bool isBlack() const;  // reflects nothing at all (e.g. the black diffuse of a light)
-  // The description, less its id (see the constructor).
+  // The description, less its id and its coating (see the constructor).
   const BsdfDescription& description() const { return desc_; }
   // The diffuse reflectance at one shading point, where a texture gives it (Scene::bsdfAt).
   void setReflectance(const Spectrum& reflectance);
@@ -63,9 +104,14 @@ class Bsdf {
   // glossy lobe's value.
   float plasticDiffuseProbability() const;
   Spectrum plasticGlossy(const Vec3f& wo, const Vec3f& wi) const;
+  // CoatedDiffuse: the base's value, and the probability of sampling the glossy lobe from wo.
+  Spectrum coatedBase(const Vec3f& wo, const Vec3f& wi) const;
+  float coatedGlossyProbability(const Vec3f& wo) const;
 
   BsdfDescription desc_;
   BsdfDescription::Type type_;
+  const CoatingTransmittance* coating_ = nullptr;
+  std::shared_ptr<const CoatingTransmittance> coatingShare_;  // empty in copies
 };
 
 // Fresnel reflectance of a dielectric interface for cos(theta_i) (sign: which side) and the

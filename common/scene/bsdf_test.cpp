@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 
 #include "common/sampling/rng.h"
 #include "common/sampling/warp.h"
@@ -142,7 +144,8 @@ void checkSamplingConsistency(const BsdfDescription& desc, float cosThetaO,
   Estimate reference;
   if (desc.type == BsdfDescription::Type::RoughConductor ||
       desc.type == BsdfDescription::Type::RoughDielectric ||
-      desc.type == BsdfDescription::Type::Plastic) {
+      desc.type == BsdfDescription::Type::Plastic ||
+      desc.type == BsdfDescription::Type::CoatedDiffuse) {
     Vec3f w = desc.twoSided && wo.z < 0 ? Vec3f(wo.x, wo.y, -wo.z) : wo;  // the back is the front
     reference.mean = quadratureAlbedo(bsdf, w, mode, 2000, 256).total();
     // The quadrature at half the resolution tells its own error.
@@ -233,6 +236,142 @@ TEST(Bsdf, PlasticIsTheSumOfItsLobes) {
   EXPECT_FALSE(Bsdf(plastic(0.05f, Spectrum(0.6f), Spectrum(0.0f))).isDelta());
 }
 
+BsdfDescription roughGlass(MicrofacetDistribution d, float alpha, float ior = 1.5f) {
+  BsdfDescription b;
+  b.type = BsdfDescription::Type::RoughDielectric;
+  b.distribution = d;
+  b.alpha = alpha;
+  b.intIOR = ior;
+  b.extIOR = 1.0f;
+  return b;
+}
+
+// ---- The coated diffuse (Mitsuba's roughplastic) ----
+
+BsdfDescription coated(MicrofacetDistribution dist, float alpha, const Spectrum& rho,
+                       const Spectrum& ks, float eta = 1.5f, bool nonlinear = false) {
+  BsdfDescription d;
+  d.type = BsdfDescription::Type::CoatedDiffuse;
+  d.distribution = dist;
+  d.alpha = alpha;
+  d.reflectance = rho;
+  d.specularReflectance = ks;
+  d.intIOR = eta;
+  d.extIOR = 1.0f;
+  d.nonlinear = nonlinear;
+  d.twoSided = true;
+  d.coating = std::make_shared<CoatingTransmittance>(dist, alpha, eta);
+  return d;
+}
+
+// The coat's table against the rough dielectric's own transmitted albedo, computed from eval()
+// by quadratureAlbedo (a different integration of a different function of the same model): from
+// outside at several cosines, and from inside through Fdr = 1 - 2 \int T_in(mu) mu dmu. The
+// tolerance is the quadrature's own error (two resolutions) plus the table's interpolation.
+TEST(CoatingTransmittance, IsTheRoughDielectricsTransmittedAlbedo) {
+  for (MicrofacetDistribution dist :
+       {MicrofacetDistribution::GGX, MicrofacetDistribution::Beckmann})
+    for (float alpha : {0.05f, 0.3f, 0.8f}) {
+      const CoatingTransmittance coat(dist, alpha, 1.5f);
+      const Bsdf glass(roughGlass(dist, alpha, 1.5f));
+      for (float mu : {0.15f, 0.5f, 0.95f}) {
+        const Vec3f wo(std::sqrt(1 - mu * mu), 0, mu);
+        const double fine =
+            quadratureAlbedo(glass, wo, TransportMode::Importance, 2000, 256).transmitted;
+        const double coarse =
+            quadratureAlbedo(glass, wo, TransportMode::Importance, 1000, 128).transmitted;
+        EXPECT_NEAR(coat.fromOutside(mu), fine, std::fabs(fine - coarse) + 2e-3)
+            << "alpha " << alpha << " mu " << mu;
+      }
+      // From inside, by the midpoint rule over mu.
+      const int n = 40;
+      double inside = 0;
+      for (int k = 0; k < n; ++k) {
+        const double mu = (k + 0.5) / n;
+        const Vec3f wo(float(std::sqrt(1 - mu * mu)), 0, float(-mu));
+        inside += 2 * mu *
+                  quadratureAlbedo(glass, wo, TransportMode::Importance, 400, 64).transmitted / n;
+      }
+      EXPECT_NEAR(coat.internalDiffuseReflectance(), 1 - inside, 4e-3) << "alpha " << alpha;
+    }
+}
+
+// A nearly smooth coat transmits 1 - F(mu) (Fresnel), and reflects back in the internal diffuse
+// reflectance that reciprocity ties to the external one: 1 - Fdr_in = (1 - Fdr_out) / eta^2,
+// with Fdr_out = 2 \int F(mu) mu dmu = 0.0918 for index 1.5.
+TEST(CoatingTransmittance, SmoothLimitIsFresnel) {
+  const CoatingTransmittance coat(MicrofacetDistribution::GGX, 1e-4f, 1.5f);
+  double fdrOut = 0;
+  const int n = 20000;
+  for (int k = 0; k < n; ++k) {
+    const double mu = (k + 0.5) / n;
+    float cosT;
+    fdrOut += 2 * mu * fresnelDielectric(float(mu), 1.5f, &cosT) / n;
+  }
+  EXPECT_NEAR(fdrOut, 0.0918, 5e-4);
+  for (float mu : {0.1f, 0.3f, 0.7f, 1.0f}) {
+    float cosT;
+    EXPECT_NEAR(coat.fromOutside(mu), 1 - fresnelDielectric(mu, 1.5f, &cosT), 2e-3) << mu;
+  }
+  EXPECT_NEAR(coat.internalDiffuseReflectance(), 1 - (1 - fdrOut) / 2.25, 2e-3);
+}
+
+TEST(Bsdf, CoatedDiffuseSamplingMatchesEvaluation) {
+  for (MicrofacetDistribution dist :
+       {MicrofacetDistribution::GGX, MicrofacetDistribution::Beckmann})
+    for (float alpha : {0.02f, 0.3f})
+      for (float c : {0.9f, 0.25f, -0.6f}) {
+        checkSamplingConsistency(coated(dist, alpha, Spectrum(0.5f, 0.3f, 0.2f), Spectrum(1.0f)),
+                                 c);
+        checkSamplingConsistency(coated(dist, alpha, Spectrum(0.8f), Spectrum(0.5f), 1.3f, true),
+                                 c);
+      }
+}
+
+// A white base under a clear coat is a white furnace: whatever the coat does not reflect it lets
+// in, the base returns, and the coat lets out in the end (Mitsuba's linear form, 1 / (1 - Fdr),
+// is exactly that geometric series for rho = 1 under a smooth coat). So the coated white loses
+// what the rough boundary itself loses to its microfacets' shadowing: its albedo is the rough
+// dielectric's reflected plus transmitted share (quadratureAlbedo of the dielectric, importance
+// form). A wrong eta^2, T or Fdr breaks that at some angle.
+TEST(Bsdf, CoatedWhiteDiffuseConservesEnergy) {
+  for (float eta : {1.5f, 1.2f})
+    for (float alpha : {0.01f, 0.1f}) {
+      const Bsdf white(
+          coated(MicrofacetDistribution::GGX, alpha, Spectrum(1.0f), Spectrum(1.0f), eta));
+      const Bsdf boundary(roughGlass(MicrofacetDistribution::GGX, alpha, eta));
+      for (float mu : {0.95f, 0.6f, 0.3f}) {
+        const Vec3f wo(std::sqrt(1 - mu * mu), 0, mu);
+        const double albedo =
+            quadratureAlbedo(white, wo, TransportMode::Radiance, 2000, 256).total();
+        const double kept =
+            quadratureAlbedo(boundary, wo, TransportMode::Importance, 2000, 256).total();
+        EXPECT_NEAR(albedo, kept, 0.005) << "eta " << eta << " alpha " << alpha << " mu " << mu;
+        EXPECT_LE(albedo, 1.0 + 2e-3);
+      }
+    }
+  // The nonlinear form darkens: rho / (1 - rho Fdr) < rho / (1 - Fdr) for rho < 1.
+  const Vec3f wo(0, 0, 1);
+  const double linear =
+      quadratureAlbedo(
+          Bsdf(coated(MicrofacetDistribution::GGX, 0.1f, Spectrum(0.5f), Spectrum(0.0f))), wo,
+          TransportMode::Radiance, 1000, 128)
+          .total();
+  const double nonlinear =
+      quadratureAlbedo(Bsdf(coated(MicrofacetDistribution::GGX, 0.1f, Spectrum(0.5f),
+                                   Spectrum(0.0f), 1.5f, true)),
+                       wo, TransportMode::Radiance, 1000, 128)
+          .total();
+  EXPECT_LT(nonlinear, linear - 0.05);
+  EXPECT_THROW(Bsdf([] {
+                 BsdfDescription d =
+                     coated(MicrofacetDistribution::GGX, 0.1f, Spectrum(0.5f), Spectrum(1.0f));
+                 d.coating.reset();
+                 return d;
+               }()),
+               std::invalid_argument);
+}
+
 TEST(Bsdf, BeckmannSamplingMatchesEvaluation) {
   for (float alpha : {0.05f, 0.25f, 1.0f}) {
     checkSamplingConsistency(conductor(MicrofacetDistribution::Beckmann, alpha), 0.9f);
@@ -245,16 +384,6 @@ TEST(Bsdf, GgxSamplingMatchesEvaluation) {
     checkSamplingConsistency(conductor(MicrofacetDistribution::GGX, alpha), 0.9f);
     checkSamplingConsistency(conductor(MicrofacetDistribution::GGX, alpha), 0.2f);
   }
-}
-
-BsdfDescription roughGlass(MicrofacetDistribution d, float alpha, float ior = 1.5f) {
-  BsdfDescription b;
-  b.type = BsdfDescription::Type::RoughDielectric;
-  b.distribution = d;
-  b.alpha = alpha;
-  b.intIOR = ior;
-  b.extIOR = 1.0f;
-  return b;
 }
 
 // Reflection and refraction through microfacets, from outside and from inside, carrying radiance

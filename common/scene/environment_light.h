@@ -1,9 +1,9 @@
 #pragma once
 // The environment at infinity (EnvironmentDescription): radiance by direction, and directions
 // sampled in proportion to the radiance's luminance, so that a small bright sun in a large dim
-// sky is found by next-event estimation and by light subpaths. A lat-long map is sampled as a
-// piecewise-constant density over its texels, each weighted by its luminance times its solid
-// angle (sin theta), and its radiance is looked up at the nearest texel: the density is then
+// sky is found by next-event estimation and by light subpaths. A map (lat-long or equal-area) is
+// sampled as a piecewise-constant density over its texels, each weighted by its luminance times
+// its solid angle, and its radiance is looked up at the nearest texel: the density is then
 // positive exactly where the radiance is, which unbiasedness needs (a bilinear lookup would glow
 // into black texels that the density never samples).
 #include <vector>
@@ -30,8 +30,9 @@ class EnvironmentLight {
  private:
   // Texel (x, y) of the map as it is lit: scale times the texel, negatives and NaN as zero.
   Spectrum texel(int x, int y) const;
-  // The texel a local direction falls in, and sin(theta) there.
-  void texelOf(const Vec3f& local, int* x, int* y, float* sinTheta) const;
+  // The texel a local direction falls in; returns the map's area (in [0, 1]^2) per unit solid
+  // angle there (0 at a lat-long map's poles).
+  double texelOf(const Vec3f& local, int* x, int* y) const;
 
   EnvironmentDescription description_;
   Matrix4 toLocal_;

@@ -34,12 +34,24 @@ struct CameraDescription {
 };
 
 enum class MicrofacetDistribution { Beckmann, GGX };
+class CoatingTransmittance;  // bsdf.h
 
 struct BsdfDescription {
   // Mitsuba 0.6's diffuse, dielectric (smooth), conductor (smooth), roughconductor and
   // roughdielectric; pbrt's plastic: a diffuse lobe (reflectance) plus a microfacet reflection
   // lobe (specularReflectance, alpha) with the Fresnel term of a dielectric of index intIOR.
-  enum class Type { Diffuse, Dielectric, Conductor, RoughConductor, RoughDielectric, Plastic };
+  // CoatedDiffuse: Mitsuba's roughplastic (and plastic, and pbrt-v4's coateddiffuse, as a coat
+  // of tiny roughness where they are smooth): the same glossy lobe over a Lambertian base seen
+  // through the coat, whose light the coat's rough transmittance lets in and out (`coating`).
+  enum class Type {
+    Diffuse,
+    Dielectric,
+    Conductor,
+    RoughConductor,
+    RoughDielectric,
+    Plastic,
+    CoatedDiffuse
+  };
   Type type = Type::Diffuse;
   std::string id;         // the XML id, or empty
   bool twoSided = false;  // wrapped in Mitsuba's "twosided"
@@ -56,6 +68,12 @@ struct BsdfDescription {
   Spectrum eta{0.0f}, k{1.0f};  // complex index of refraction of the conductor
   float extEta = 1.0f;          // index of the exterior medium
   Spectrum specularReflectance{1.0f};
+  // CoatedDiffuse: the coat's transmittance for (distribution, alpha, intIOR / extIOR), made by
+  // makeCoatingTransmittance (bsdf.h); and Mitsuba's "nonlinear" (the base's inter-reflections
+  // under the coat darken and saturate its colour: rho / (1 - rho Fdr) instead of rho /
+  // (1 - Fdr)).
+  std::shared_ptr<const CoatingTransmittance> coating;
+  bool nonlinear = false;
 };
 
 struct ShapeDescription {
@@ -81,16 +99,20 @@ struct ShapeDescription {
 };
 
 // Light from infinitely far away (Mitsuba's constant and envmap, pbrt's infinite): the radiance
-// arriving from world direction w (pointing away from the scene) is scale times the lat-long
-// image at w's direction in the light's frame, or scale alone without an image. The frame is
-// pbrt's: local z up, u = phi / 2 pi with phi = atan2(y, x), v = theta / pi from the image's top
-// row; toWorld takes it to world space (the Mitsuba loader folds its own y-up convention in).
+// arriving from world direction w (pointing away from the scene) is scale times the image at
+// w's direction in the light's frame, or scale alone without an image. The frame is pbrt's:
+// local z up. A lat-long image has u = phi / 2 pi with phi = atan2(y, x), v = theta / pi from
+// its top row; an equal-area one (pbrt-v4's, square) is Clarberg's octahedral map (warp.h's
+// equalAreaSphereToSquare), v from its top row too. toWorld takes the frame to world space (the
+// Mitsuba loader folds its own y-up convention in).
 struct EnvironmentDescription {
+  enum class Mapping { LatLong, EqualArea };
   bool present = false;
   Spectrum scale{1.0f};
-  std::shared_ptr<const TextureImage> image;  // the lat-long map, or null for a constant
-  Matrix4 toWorld = Matrix4::identity();      // a rotation
-  std::string origin;                         // "scene.xml:12 (envmap sky.exr)", for messages
+  std::shared_ptr<const TextureImage> image;  // the map, or null for a constant
+  Mapping mapping = Mapping::LatLong;
+  Matrix4 toWorld = Matrix4::identity();  // a rotation
+  std::string origin;                     // "scene.xml:12 (envmap sky.exr)", for messages
 };
 
 // A point light (pbrt's point and spot, Mitsuba's point and spot): radiant intensity

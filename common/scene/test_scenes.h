@@ -1,11 +1,13 @@
 #pragma once
 // Scenes the statistical tests write for themselves (test code only): the white furnace, with
 // its analytic answers, a glass ball for the specular paths, and a sky for environment lights.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <string>
 
+#include "common/sampling/warp.h"
 #include "common/scene/scene_description.h"
 
 namespace farm {
@@ -93,6 +95,29 @@ inline std::shared_ptr<TextureImage> latLongSky(int sunColumn) {
       Spectrum c = y < 16 ? Spectrum(0.2f + 0.02f * y, 0.4f, 0.9f) : Spectrum(0.1f, 0.08f, 0.05f);
       if (y >= 5 && y <= 6 && x >= sunColumn && x <= sunColumn + 1) c = Spectrum(400, 350, 300);
       for (int k = 0; k < 3; ++k) image->floats[3 * (size_t(y) * 64 + x) + k] = c[k];
+    }
+  }
+  return image;
+}
+
+// The same kind of sky as a 48 x 48 equal-area map (pbrt-v4's; warp.h): blue above the horizon
+// (lighter towards it), the sun (400, 350, 300) within 5 degrees of theta 31 and phi 60 degrees,
+// dark ground below; each texel the sky at its centre's direction.
+inline std::shared_ptr<TextureImage> equalAreaSky() {
+  auto image = std::make_shared<TextureImage>();
+  const int n = 48;
+  image->width = image->height = n;
+  image->floats.resize(size_t(n) * n * 3);
+  const float sunTheta = 31 * kPi / 180, sunPhi = 60 * kPi / 180;
+  const Vec3f sun(std::sin(sunTheta) * std::cos(sunPhi), std::sin(sunTheta) * std::sin(sunPhi),
+                  std::cos(sunTheta));
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const Vec3f w = equalAreaSquareToSphere(Vec2f((x + 0.5f) / n, (y + 0.5f) / n));
+      Spectrum c =
+          w.z > 0 ? Spectrum(0.2f + 0.3f * (1 - w.z), 0.4f, 0.9f) : Spectrum(0.1f, 0.08f, 0.05f);
+      if (dot(w, sun) > std::cos(5 * kPi / 180)) c = Spectrum(400, 350, 300);
+      for (int k = 0; k < 3; ++k) image->floats[3 * (size_t(y) * n + x) + k] = c[k];
     }
   }
   return image;

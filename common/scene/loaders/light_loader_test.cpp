@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/film/image.h"
+#include "common/sampling/warp.h"
 #include "common/scene/environment_light.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/loaders/scene_loader.h"
@@ -102,6 +103,27 @@ TEST(EnvironmentLoader, PbrtInfiniteIsZUpInBothVersions) {
                    std::cos(theta));
     });
   }
+}
+
+// pbrt-v4's "filename" with a square map: the equal-area mapping, in the light's frame.
+TEST(EnvironmentLoader, PbrtV4SquareMapIsEqualArea) {
+  TempDir dir;
+  writeMap(dir, "square.exr", 8, 8);
+  SceneDescription d = loadSceneDescription(
+      dir.write("scene.pbrt", pbrtScene("AttributeBegin\nRotate 30 1 0 0\nLightSource \"infinite\" "
+                                        "\"string filename\" \"square.exr\"\nAttributeEnd\n")));
+  ASSERT_TRUE(d.environment.present);
+  EXPECT_EQ(d.environment.mapping, EnvironmentDescription::Mapping::EqualArea);
+  const EnvironmentLight light(d.environment);
+  // Every texel, looked up at its centre's direction in the light's frame turned to the world.
+  const Matrix4 toWorld = Matrix4::rotate(Vec3f(1, 0, 0), 30);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      const Vec3f local = equalAreaSquareToSphere(Vec2f((x + 0.5f) / 8, (y + 0.5f) / 8));
+      const Spectrum got = light.radiance(normalize(toWorld.applyVector(local)));
+      const Spectrum want = d.environment.image->texel(x, y);
+      EXPECT_TRUE(got.x == want.x && got.y == want.y && got.z == want.z) << x << " " << y;
+    }
 }
 
 TEST(EnvironmentLoader, ConstantEnvironments) {
@@ -206,10 +228,10 @@ TEST(EnvironmentLoader, BadEnvironmentsGetAClearError) {
   };
   const std::string envmap = "<emitter type=\"envmap\"><string name=\"filename\" value=\"";
   const Case cases[] = {
-      {"a.pbrt", pbrtScene("LightSource \"infinite\" \"string filename\" \"square.exr\"\n"),
-       "pbrt-v4's square equal-area maps are not"},
+      {"a.pbrt", pbrtScene("LightSource \"infinite\" \"string mapname\" \"square.exr\"\n"),
+       "it must be a lat-long map, twice as wide as high"},
       {"b.pbrt", pbrtScene("LightSource \"infinite\" \"string filename\" \"wide.exr\"\n"),
-       "only lat-long maps (twice as wide as high)"},
+       "it must be a square equal-area map (pbrt-v4) or a lat-long map"},
       {"c.pbrt", pbrtScene("LightSource \"infinite\"\nLightSource \"infinite\"\n"),
        "more than one infinite light"},
       {"d.pbrt", pbrtScene("Scale 1 2 1\nLightSource \"infinite\"\n"), "must be a rotation"},
@@ -237,7 +259,7 @@ TEST(EnvironmentLoader, BadEnvironmentsGetAClearError) {
            "sky.exr\"/><float name=\"gamma\" value=\"2.2\"/></emitter>\n</scene>\n",
        "unsupported parameter 'gamma'"},
       {"o.xml", std::string(kMitsubaHead) + envmap + "square.exr\"/></emitter>\n</scene>\n",
-       "only lat-long maps"},
+       "it must be a lat-long map"},
       {"p.pbrt", pbrtScene("LightSource \"spot\" \"float coneangle\" 0\n"), "coneangle"},
       {"q.pbrt", pbrtScene("LightSource \"spot\" \"point from\" [1 1 1] \"point to\" [1 1 1]\n"),
        "coincide"},

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/scene/bsdf.h"
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/loaders/serialized_reader.h"
@@ -769,6 +770,34 @@ class MitsubaLoader {
     props.take("sampleVisible");  // a sampling choice, not a look
   }
 
+  // Mitsuba's plastic and roughplastic: a diffuse base under a dielectric coat (bsdf.h's
+  // CoatedDiffuse). The smooth plastic's coat becomes a microfacet coat of alpha 1e-4, which the
+  // stability suite shows renders as the smooth one does except that it reflects point lights.
+  void parseCoatedDiffuse(const pugi::xml_node& node, PropertySet& props, const std::string& type,
+                          BsdfDescription* b) {
+    b->type = BsdfDescription::Type::CoatedDiffuse;
+    if (type == "roughplastic") {
+      parseRoughness(node, props, b);
+    } else {
+      b->distribution = MicrofacetDistribution::GGX;
+      b->alpha = 1e-4f;
+      scene_.warnings.push_back(
+          baseName_ + ":" + std::to_string(lineOf(node)) +
+          ": plastic: its smooth coat is rendered as a microfacet coat of roughness 1e-4 (the same "
+          "image, except that point lights leave a tiny highlight)");
+    }
+    b->intIOR = float(getIor(props, "intIOR", 1.49));  // polypropylene
+    b->extIOR = float(getIor(props, "extIOR", 1.000277));
+    if (b->intIOR == b->extIOR) fail(node, type + ": intIOR and extIOR must differ");
+    b->nonlinear = getBoolean(props, "nonlinear", false);
+    b->specularReflectance = getSpectrum(props, "specularReflectance", Spectrum(1.0f));
+    b->reflectance = getSpectrum(props, "diffuseReflectance", Spectrum(0.5f));
+    for (const Spectrum* v : {&b->reflectance, &b->specularReflectance})
+      if (v->x > 1 || v->y > 1 || v->z > 1)
+        fail(node, type + ": a reflectance above 1 would create energy");
+    b->coating = sharedCoatingTransmittance(b->distribution, b->alpha, b->intIOR / b->extIOR);
+  }
+
   // The complex index of refraction of a (rough) conductor, and its reflectance scale.
   void parseConductorIndex(PropertySet& props, BsdfDescription* b) {
     pugi::xml_node materialNode;
@@ -825,7 +854,9 @@ class MitsubaLoader {
     }
     // Textured parameters: <texture name="reflectance" ...> or <ref name="reflectance" id=.../>.
     // Only a diffuse reflectance may be textured.
-    const char* texturable = type == "diffuse" ? "reflectance" : nullptr;
+    const char* texturable = type == "diffuse"                               ? "reflectance"
+                             : (type == "plastic" || type == "roughplastic") ? "diffuseReflectance"
+                                                                             : nullptr;
     for (const pugi::xml_node& child : nested) {
       std::string_view tag = child.name();
       if (tag != "texture" && !(tag == "ref" && child.attribute("name"))) failUnknownElement(child);
@@ -860,10 +891,12 @@ class MitsubaLoader {
       if (b.intIOR == b.extIOR)
         fail(node,
              "roughdielectric with intIOR equal to extIOR does not refract; leave the surface out");
+    } else if (type == "plastic" || type == "roughplastic") {
+      parseCoatedDiffuse(node, props, type, &b);
     } else {
       fail(node, "unknown or unsupported bsdf type '" + type +
                      "' (supported: diffuse, twosided, dielectric, roughdielectric, conductor, "
-                     "roughconductor)");
+                     "roughconductor, plastic, roughplastic)");
     }
     rejectUnused(props, what);
     return b;
@@ -1022,8 +1055,8 @@ class MitsubaLoader {
     mitsubaFromPbrt.m[1] = {0, 0, 1, 0};
     mitsubaFromPbrt.m[2] = {-1, 0, 0, 0};
     mitsubaFromPbrt.m[3] = {0, 0, 0, 1};
-    scene_.environment =
-        makeEnvironment(dir_, path_, lineOf(node), scale, toWorld * mitsubaFromPbrt, filename);
+    scene_.environment = makeEnvironment(dir_, path_, lineOf(node), scale,
+                                         toWorld * mitsubaFromPbrt, filename, false);
   }
 
   void parseShape(const pugi::xml_node& node) {

@@ -474,6 +474,60 @@ TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   EXPECT_FLOAT_EQ(s.bsdfs[8].extIOR, 1.000277f);
 }
 
+// plastic and roughplastic: the coated diffuse, with Mitsuba's defaults (polypropylene, air, a
+// white specular reflectance, the linear form), the smooth one's coat of alpha 1e-4 said in a
+// warning, a textured base, and the errors of the model.
+TEST(MitsubaLoaderTest, PlasticsAreCoatedDiffuse) {
+  TempDir dir;
+  SceneDescription s = loadMitsubaScene(dir.write("s.xml", sceneXml(R"(
+<bsdf type="plastic" id="p"/>
+<bsdf type="roughplastic" id="r">
+  <string name="distribution" value="ggx"/><float name="alpha" value="0.2"/>
+  <float name="intIOR" value="1.6"/><rgb name="diffuseReflectance" value="0.1 0.2 0.3"/>
+  <spectrum name="specularReflectance" value="0.5"/><boolean name="nonlinear" value="true"/>
+</bsdf>
+<bsdf type="twosided" id="t"><ref id="r"/></bsdf>
+)")));
+  ASSERT_EQ(s.bsdfs.size(), 3u);
+  const BsdfDescription &p = s.bsdfs[0], &r = s.bsdfs[1];
+  EXPECT_EQ(p.type, BsdfDescription::Type::CoatedDiffuse);
+  EXPECT_FLOAT_EQ(p.alpha, 1e-4f);
+  EXPECT_FLOAT_EQ(p.intIOR, 1.49f);
+  EXPECT_FLOAT_EQ(p.extIOR, 1.000277f);
+  expectNear(p.reflectance, Vec3f(0.5f), 0);
+  expectNear(p.specularReflectance, Vec3f(1.0f), 0);
+  EXPECT_FALSE(p.nonlinear);
+  ASSERT_TRUE(p.coating);
+  EXPECT_EQ(r.type, BsdfDescription::Type::CoatedDiffuse);
+  EXPECT_EQ(r.distribution, MicrofacetDistribution::GGX);
+  EXPECT_FLOAT_EQ(r.alpha, 0.2f);
+  EXPECT_FLOAT_EQ(r.intIOR, 1.6f);
+  expectNear(r.reflectance, {0.1f, 0.2f, 0.3f}, 0);
+  expectNear(r.specularReflectance, Vec3f(0.5f), 0);
+  EXPECT_TRUE(r.nonlinear);
+  ASSERT_TRUE(r.coating);
+  EXPECT_TRUE(s.bsdfs[2].twoSided);
+  EXPECT_EQ(s.bsdfs[2].coating, r.coating);  // one table for one kind of coat
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_NE(s.warnings[0].find("roughness 1e-4"), std::string::npos) << s.warnings[0];
+
+  const struct {
+    std::string xml, message;
+  } bad[] = {
+      {R"(<bsdf type="plastic"><float name="intIOR" value="1.5"/><float name="extIOR" value="1.5"/></bsdf>)",
+       "intIOR and extIOR must differ"},
+      {R"(<bsdf type="roughplastic"><rgb name="diffuseReflectance" value="1.2 0.5 0.5"/></bsdf>)",
+       "a reflectance above 1"},
+      {R"(<bsdf type="roughplastic"><string name="distribution" value="phong"/></bsdf>)",
+       "unsupported microfacet distribution 'phong'"},
+      {R"(<bsdf type="plastic"><float name="fdrInt" value="0.5"/></bsdf>)",
+       "unsupported parameter 'fdrInt'"},
+  };
+  for (const auto& c : bad)
+    expectMitsubaLoadError(
+        dir.write("bad.xml", "<scene version=\"0.5.0\">\n" + c.xml + "\n</scene>"), c.message, 2);
+}
+
 // A PLY (ASCII, quads, per-vertex normals) loads as the OBJ of the same mesh: the same triangles
 // in world space (the quads split by Open Asset Import Library, corners in the file's winding),
 // normals transformed and normalized, flipNormals and faceNormals as for OBJ.

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/scene/bsdf.h"
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/loaders/pbrt_tokenizer.h"
 #include "common/scene/loaders/ply_reader.h"
@@ -941,6 +942,14 @@ class PbrtLoader {
     return alpha;
   }
 
+  // A diffuse reflectance, which may be a texture (`def` where the material does not give it).
+  void readReflectance(Directive& d, const std::string& name, float def, BsdfDescription* b) {
+    b->reflectance = Spectrum(def);
+    int texture = -1;
+    getSpectrum(d, name, &b->reflectance, &texture);
+    b->reflectanceTexture = texture;
+  }
+
   int makeMaterial(Directive& d, const std::string& type) {
     if (type == "diffuse" || type == "conductor" || type == "dielectric" || type == "coateddiffuse")
       sawV4_ = true;
@@ -952,10 +961,7 @@ class PbrtLoader {
     if (type == "matte" || type == "diffuse") {
       b.type = BsdfDescription::Type::Diffuse;
       b.twoSided = true;  // pbrt's BSDFs scatter on both sides of a surface
-      b.reflectance = Spectrum(0.5f);
-      int texture = -1;
-      getSpectrum(d, type == "matte" ? "Kd" : "reflectance", &b.reflectance, &texture);
-      b.reflectanceTexture = texture;
+      readReflectance(d, type == "matte" ? "Kd" : "reflectance", 0.5f, &b);
       if (type == "matte" && getFloat(d, "sigma", 0) != 0)
         fail(d, "Oren-Nayar matte (sigma > 0) is not supported");
     } else if (type == "metal" || type == "conductor") {
@@ -1021,10 +1027,7 @@ class PbrtLoader {
       // reflection beyond 42 degrees); the farm takes the physical one, from the air.
       b.type = BsdfDescription::Type::Plastic;
       b.twoSided = true;
-      b.reflectance = Spectrum(0.25f);
-      int texture = -1;
-      getSpectrum(d, "Kd", &b.reflectance, &texture);
-      b.reflectanceTexture = texture;
+      readReflectance(d, "Kd", 0.25f, &b);
       b.specularReflectance = Spectrum(0.25f);
       getSpectrum(d, "Ks", &b.specularReflectance);
       double alpha = roughness(d, false, 0.1, true);
@@ -1037,11 +1040,49 @@ class PbrtLoader {
            "plastic: its glossy lobe's Fresnel term is a dielectric's seen from the air (pbrt-v3 "
            "computes it from inside the coating, which reflects totally beyond 42 degrees)");
     } else if (type == "coateddiffuse") {
-      fail(d, what + " is not supported yet");
+      // pbrt-v4's coateddiffuse: a dielectric coat over a Lambertian base, which pbrt evaluates
+      // by a random walk between the two; here in closed form (bsdf.h's CoatedDiffuse, with the
+      // base's inter-reflections summed as their series, as the walk does).
+      b.type = BsdfDescription::Type::CoatedDiffuse;
+      b.twoSided = true;
+      readReflectance(d, "reflectance", 0.5f, &b);
+      if (b.reflectance.x > 1 || b.reflectance.y > 1 || b.reflectance.z > 1)
+        fail(d, what + ": a reflectance above 1 would create energy");
+      Param* etaParam = d.params.find("eta");
+      double eta = 1.5;
+      if (etaParam) {
+        if (etaParam->type != "float" || etaParam->numbers.size() != 1)
+          failParam(d, *etaParam,
+                    "a dispersive (spectral) index of refraction is not supported: give one float");
+        eta = getFloat(d, "eta", 1.5);
+      }
+      if (!(eta > 0) || eta > 100 || eta == 1)
+        fail(d, what + ": the coat's index of refraction must be in (0, 100] and not 1");
+      Spectrum albedo(0.0f);
+      getSpectrum(d, "albedo", &albedo);
+      if (!isBlack(albedo)) fail(d, what + ": a scattering coat (albedo > 0) is not supported");
+      getFloat(d, "g", 0);
+      getInt(d, "maxdepth", 10);  // the random walk's: the series here has no end
+      getInt(d, "nsamples", 1);
+      const double thickness = getFloat(d, "thickness", 0.01);
+      if (!(thickness >= 0)) fail(d, what + ": thickness must be >= 0");
+      const double alpha = roughness(d, true, 0.0);
+      b.distribution = MicrofacetDistribution::GGX;
+      b.alpha = alpha > 0 ? float(alpha) : 1e-4f;
+      b.intIOR = float(eta);
+      b.extIOR = 1.0f;
+      b.nonlinear = true;
+      b.specularReflectance = Spectrum(1.0f);
+      b.coating = sharedCoatingTransmittance(b.distribution, b.alpha, b.intIOR);
+      warn(d, what +
+                  ": rendered in closed form, not by pbrt-v4's random walk; its layer absorbs "
+                  "nothing here (pbrt's, of thickness " +
+                  formatNumber(thickness) + ", does, slightly)" +
+                  (alpha > 0 ? "" : "; its smooth coat is a microfacet coat of roughness 1e-4"));
     } else {
       fail(d, what +
                   " is not supported (matte/diffuse, metal/conductor, mirror, glass/dielectric, "
-                  "plastic)");
+                  "plastic, coateddiffuse)");
     }
     getString(d, "type", "");  // MakeNamedMaterial's, read already
     rejectUnused(d, what);
@@ -1142,13 +1183,16 @@ class PbrtLoader {
     std::string filename = getString(d, "filename", "");
     const std::string mapname = getString(d, "mapname", "");
     if (!filename.empty() && !mapname.empty()) fail(d, "both \"filename\" and \"mapname\" given");
+    // v4's "filename" names a square equal-area map; a lat-long one (v3's "mapname") is taken too.
+    const bool equalAreaAllowed = !filename.empty();
     if (filename.empty()) filename = mapname;
     if (d.params.has("illuminance")) fail(d, "infinite light 'illuminance' is not supported");
     if (d.params.has("portal")) fail(d, "infinite light portals are not supported");
     getInt(d, "nsamples", 1);  // v3's sample count: the farm samples its own way
     getInt(d, "samples", 1);
     rejectUnused(d, "infinite light");
-    scene_.environment = makeEnvironment(dir_, d.file, d.line, L * scale, attrs_.ctm, filename);
+    scene_.environment =
+        makeEnvironment(dir_, d.file, d.line, L * scale, attrs_.ctm, filename, equalAreaAllowed);
   }
 
   // ---- Shapes ----

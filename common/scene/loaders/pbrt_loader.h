@@ -9,11 +9,13 @@
 // CoordinateSystem, CoordSysTransform, TransformBegin/End, AttributeBegin/End, ReverseOrientation;
 // Include and Import; Material, MakeNamedMaterial, NamedMaterial with matte/diffuse,
 // metal/conductor (rgb or named metal spectra), mirror, glass/dielectric, rough variants with
-// remaproughness (v3's polynomial, v4's square root, told by the material's name), v3's plastic;
+// remaproughness (v3's polynomial, v4's square root, told by the material's name), v3's plastic,
+// v4's coateddiffuse (non-scattering coat);
 // Texture imagemap, checkerboard, scale and constant with uv mapping; Shape trianglemesh, plymesh,
 // sphere, disk (tessellated) and planar bilinear patches; ObjectBegin/End and ObjectInstance
 // (flattened: each instance copies its object's shapes); AreaLightSource diffuse (one- or
-// two-sided); LightSource infinite (constant or a lat-long map), point and spot.
+// two-sided); LightSource infinite (constant, a lat-long map, or v4's equal-area one), point and
+// spot.
 //
 // Everything else that would change the picture is an error naming file, line and what is not
 // supported. Meshes, textures and included files must be inside the scene's folder.

@@ -294,6 +294,37 @@ TEST(PbrtLoader, MaterialsOfBothVersions) {
   EXPECT_FLOAT_EQ(bsdf(10).intIOR, 1.5f);
 }
 
+// pbrt-v4's coateddiffuse: the coated diffuse with v4's defaults (reflectance 0.5, eta 1.5, a
+// smooth coat, made a microfacet coat of alpha 1e-4), the square-root roughness remapping, the
+// series of the base's inter-reflections (nonlinear), and a warning that says what differs from
+// pbrt's random walk.
+TEST(PbrtLoader, CoatedDiffuse) {
+  TempDir dir;
+  SceneDescription s = loadPbrtScene(dir.write(
+      "s.pbrt", scene("Material \"coateddiffuse\"\n"
+                      "Shape \"sphere\"\n"
+                      "Material \"coateddiffuse\" \"rgb reflectance\" [0.1 0.2 0.3] \"float "
+                      "roughness\" 0.04 \"float eta\" 1.33 \"float thickness\" 0.1\n"
+                      "Shape \"sphere\"\n")));
+  ASSERT_EQ(s.bsdfs.size(), 2u);
+  const BsdfDescription &smooth = s.bsdfs[0], &rough = s.bsdfs[1];
+  EXPECT_EQ(smooth.type, BsdfDescription::Type::CoatedDiffuse);
+  EXPECT_FLOAT_EQ(smooth.alpha, 1e-4f);
+  EXPECT_FLOAT_EQ(smooth.intIOR, 1.5f);
+  expectNear(smooth.reflectance, Spectrum(0.5f), 0);
+  EXPECT_TRUE(smooth.nonlinear);
+  EXPECT_TRUE(smooth.twoSided);
+  ASSERT_TRUE(smooth.coating);
+  EXPECT_EQ(rough.distribution, MicrofacetDistribution::GGX);
+  EXPECT_FLOAT_EQ(rough.alpha, 0.2f);  // sqrt(0.04)
+  EXPECT_FLOAT_EQ(rough.intIOR, 1.33f);
+  expectNear(rough.reflectance, {0.1f, 0.2f, 0.3f}, 0);
+  ASSERT_TRUE(rough.coating);
+  ASSERT_EQ(s.warnings.size(), 2u);
+  EXPECT_NE(s.warnings[0].find("roughness 1e-4"), std::string::npos) << s.warnings[0];
+  EXPECT_NE(s.warnings[1].find("of thickness 0.1, does"), std::string::npos) << s.warnings[1];
+}
+
 TEST(PbrtLoader, ImageTexturesAndTheirEncodings) {
   TempDir dir;
   Image img(2, 1);
@@ -365,7 +396,9 @@ TEST(PbrtLoader, UnsupportedAndMalformedInputGetsAClearError) {
        "light source 'goniometric' is not supported"},
       {"\n\nShape \"curve\" \"point P\" [0 0 0 1 1 1 2 2 2 3 3 3]\n", 7,
        "shape 'curve' is not supported"},
-      {"Material \"coateddiffuse\"\n", 5, "material 'coateddiffuse' is not supported"},
+      {"Material \"coateddiffuse\" \"rgb albedo\" [0.5 0.5 0.5]\n", 5, "a scattering coat"},
+      {"Material \"coateddiffuse\" \"spectrum eta\" \"glass-BK7\"\n", 5, "dispersive"},
+      {"Material \"coateddiffuse\" \"rgb reflectance\" [1.5 0.5 0.5]\n", 5, "above 1"},
       {"Material \"plastic\" \"float roughness\" 0 \"bool remaproughness\" false\n", 5,
        "plastic of roughness 0"},
       {"Material \"uber\"\n", 5, "material 'uber' is not supported"},

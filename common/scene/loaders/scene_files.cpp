@@ -174,7 +174,7 @@ namespace farm {
 
 EnvironmentDescription makeEnvironment(const fs::path& dir, const std::string& file, int line,
                                        const Spectrum& scale, const Matrix4& lightToWorld,
-                                       const std::string& filename) {
+                                       const std::string& filename, bool equalAreaAllowed) {
   EnvironmentDescription e;
   e.present = true;
   e.origin = fs::path(file).filename().string() + ":" + std::to_string(line) + " (environment" +
@@ -197,13 +197,17 @@ EnvironmentDescription makeEnvironment(const fs::path& dir, const std::string& f
   } catch (const std::exception& x) {
     throw SceneLoadError(file, line, "cannot read environment map '" + filename + "': " + x.what());
   }
-  if (image->width != 2 * image->height)
-    throw SceneLoadError(
-        file, line,
-        "environment map '" + filename + "' is " + std::to_string(image->width) + "x" +
-            std::to_string(image->height) +
-            ": only lat-long maps (twice as wide as high) are supported" +
-            (image->width == image->height ? " (pbrt-v4's square equal-area maps are not)" : ""));
+  if (equalAreaAllowed && image->width == image->height) {
+    e.mapping = EnvironmentDescription::Mapping::EqualArea;
+  } else if (image->width != 2 * image->height) {
+    throw SceneLoadError(file, line,
+                         "environment map '" + filename + "' is " + std::to_string(image->width) +
+                             "x" + std::to_string(image->height) +
+                             (equalAreaAllowed ? ": it must be a square equal-area map (pbrt-v4) "
+                                                 "or a lat-long map twice as wide as high"
+                                               : ": it must be a lat-long map, twice as wide as "
+                                                 "high"));
+  }
   e.image = std::move(image);
   return e;
 }

@@ -89,11 +89,12 @@ enum class Similarity { Uniform, NonUniformScale, Shear };
 Similarity similarityOf(const Matrix4& t, double* scale);
 
 // An environment light as both loaders describe it (see EnvironmentDescription): `lightToWorld`
-// in pbrt's lat-long frame (z up) must be a rotation, possibly mirrored and uniformly scaled;
-// `filename` (in the scene's folder `dir`; empty for a constant) a lat-long map, twice as wide
-// as high. Errors are SceneLoadErrors at file:line.
+// in pbrt's frame (z up) must be a rotation, possibly mirrored and uniformly scaled; `filename`
+// (in the scene's folder `dir`; empty for a constant) a lat-long map, twice as wide as high, or
+// where equalAreaAllowed (pbrt-v4's "filename") a square equal-area one. Errors are
+// SceneLoadErrors at file:line.
 EnvironmentDescription makeEnvironment(const std::filesystem::path& dir, const std::string& file,
                                        int line, const Spectrum& scale, const Matrix4& lightToWorld,
-                                       const std::string& filename);
+                                       const std::string& filename, bool equalAreaAllowed);
 
 }  // namespace farm
