@@ -366,19 +366,25 @@ TEST(MltChain, StationaryAroundTheGlassBall) {
 
 // --- Resume ----------------------------------------------------------------------------------
 
+// Chain `index` of a few seeded in `scene`, run whole and resumed after its first flush; the
+// spec, and the uninterrupted run's flushes.
+std::vector<ChainFlush> expectChainResumes(const Scene& scene, const BootstrapResult& seeds,
+                                           int index, ChainSpec* spec) {
+  spec->algorithm = Algorithm::MLT;
+  spec->chainIndex = uint32_t(index);
+  spec->seed = 9;
+  spec->maxDepth = maxDepthOf(scene);
+  spec->budget = 3000;
+  spec->flushInterval = 1000;
+  spec->seedPath = seeds.seedPaths[size_t(index)];
+  return expectResumesExactly(
+      *spec, 0, [&](const ChainSpec& c, const FlushSink& sink) { runMltChain(scene, c, sink); });
+}
+
 TEST(MltChain, ResumedChainContinuesExactly) {
   auto scene = loadSmall(glassBallScene());
-  BootstrapResult seeds = bootstrapSeeds(scene, 4, 9);
   ChainSpec spec;
-  spec.algorithm = Algorithm::MLT;
-  spec.chainIndex = 2;
-  spec.seed = 9;
-  spec.maxDepth = maxDepthOf(*scene);
-  spec.budget = 3000;
-  spec.flushInterval = 1000;
-  spec.seedPath = seeds.seedPaths[2];
-  std::vector<ChainFlush> whole = expectResumesExactly(
-      spec, 0, [&](const ChainSpec& c, const FlushSink& sink) { runMltChain(*scene, c, sink); });
+  std::vector<ChainFlush> whole = expectChainResumes(*scene, bootstrapSeeds(scene, 4, 9), 2, &spec);
   ASSERT_EQ(whole.size(), 3u);
   ChainSpec corrupt = spec;
   corrupt.resumeState = "garbage";
@@ -386,6 +392,18 @@ TEST(MltChain, ResumedChainContinuesExactly) {
   ChainSpec noSeed = spec;
   noSeed.seedPath.clear();
   EXPECT_THROW(runMltChain(*scene, noSeed, [](ChainFlush&&) { return true; }), std::runtime_error);
+}
+
+// A chain whose paths start at a point light (a light vertex without a shape) resumes from its
+// state too.
+TEST(MltChain, ResumedChainFromAPointLightContinuesExactly) {
+  const std::string file = litBoxScene(
+      "LightSource \"point\" \"rgb I\" [4 4 4] \"point from\" "
+      "[0 2.5 1.5]\n");
+  auto scene = loadSmall(file);
+  ChainSpec spec;
+  EXPECT_EQ(expectChainResumes(*scene, bootstrapSeeds(scene, 4, 9), 1, &spec).size(), 3u);
+  std::filesystem::remove(file);
 }
 
 }  // namespace

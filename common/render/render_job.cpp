@@ -335,22 +335,15 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
                              " yet (its mutations keep each seed's lens point): use pt, bdpt, "
                              "pssmlt, pssmlt-pt or mmlt");
   }
-  // Their path-space mutations build and perturb vertices on surfaces only; a path from the
-  // environment (a vertex at infinity), from a point light or from the back of a two-sided one
-  // is not one of theirs yet.
-  bool twoSided = false;
-  for (const ShapeDescription& shape : desc.shapes)
-    twoSided |= shape.isEmitter && shape.emitsBothSides;
-  if ((desc.environment.present || !desc.pointLights.empty() || twoSided) &&
+  // Their path-space mutations build and perturb vertices at finite points only; a path from
+  // the environment (a vertex at infinity) is not one of theirs yet.
+  if (desc.environment.present &&
       (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
-    throw SceneLoadError(
-        path, 0,
-        std::string(desc.environment.present ? "an environment light"
-                    : twoSided               ? "a two-sided area light"
-                                             : "a point or spot light") +
-            " is not supported by " + algorithmName(settings.algorithm) +
-            " yet (its mutations build paths from lights with an area only): use pt, bdpt, "
-            "pssmlt, pssmlt-pt or mmlt");
+    throw SceneLoadError(path, 0,
+                         std::string("an environment light is not supported by ") +
+                             algorithmName(settings.algorithm) +
+                             " yet (its mutations build paths from lights at finite points "
+                             "only): use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
   }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -121,6 +122,28 @@ inline std::shared_ptr<TextureImage> equalAreaSky() {
     }
   }
   return image;
+}
+
+// A pbrt file (in the temporary folder, named by its light) of a grey box lit by `light` (pbrt
+// world lines), seen from its open front; its path.
+inline std::string litBoxScene(const std::string& light) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() /
+       ("farm_mutation_box_" + std::to_string(std::hash<std::string>()(light)) + ".pbrt"))
+          .string();
+  std::ofstream(path)
+      << "LookAt 0 1.5 -2.5  0 1.5 3  0 1 0\nCamera \"perspective\" \"float fov\" 50\n"
+         "Integrator \"path\" \"integer maxdepth\" 5\nWorldBegin\n"
+         "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
+         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3  4 5 6 4 6 7  8 9 10 8 10 11  "
+         "12 13 14 12 14 15  16 17 18 16 18 19]\n"
+         "  \"point P\" [-1.5 0 -1  1.5 0 -1  1.5 0 3  -1.5 0 3"  // floor
+         "  -1.5 3 -1  -1.5 3 3  1.5 3 3  1.5 3 -1"               // ceiling
+         "  -1.5 0 3  1.5 0 3  1.5 3 3  -1.5 3 3"                 // back
+         "  -1.5 0 -1  -1.5 0 3  -1.5 3 3  -1.5 3 -1"             // left
+         "  1.5 0 -1  1.5 3 -1  1.5 3 3  1.5 0 3]\n" +            // right
+             light;
+  return path;
 }
 
 }  // namespace farm

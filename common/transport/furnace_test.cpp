@@ -324,12 +324,21 @@ TEST(AnalyticIrradiance, TwoSidedLight) {
 TEST(AnalyticIrradiance, PathSpace) {
   expectIrradiance(Algorithm::MLT);
 }
+// Path-space MLT from point lights (its bidirectional mutation emits from them by their own
+// distribution) and from both sides of a two-sided one, through 90 degrees too.
+TEST(AnalyticIrradiance, PathSpacePointSpotAndTwoSided) {
+  expectIrradiance(Algorithm::MLT, FloorLight::Point);
+  expectIrradiance(Algorithm::MLT, FloorLight::Spot);
+  expectIrradiance(Algorithm::MLT, FloorLight::Point, 90);
+  expectIrradiance(Algorithm::MLT, FloorLight::TwoSidedQuad);
+  expectIrradiance(Algorithm::MLT, FloorLight::TwoSidedQuad, 90);
+}
 // ERPT moves each seed's energy across pixels, so its pixels are not independent estimates; 32
 // independent renders are. Per block of 4 x 4 pixels, their mean against the analytic radiance
 // averaged over the block, with Student's t for 31 degrees of freedom and a Bonferroni bound over
 // the 16 blocks (1e-4 in all): the energy must land where the light falls, block by block.
-TEST(AnalyticIrradiance, EnergyRedistribution) {
-  auto scene = std::make_shared<Scene>(irradianceScene());
+void expectEnergyRedistributionBlocks(FloorLight lightKind) {
+  auto scene = std::make_shared<Scene>(irradianceScene(lightKind, 10));
   const Camera& cam = scene->camera();
   const int renders = 32, blocks = 16, side = cam.width() / 4;
   std::vector<std::vector<double>> blockMeans(blocks);
@@ -354,14 +363,25 @@ TEST(AnalyticIrradiance, EnergyRedistribution) {
     double expected = 0;
     for (int y = 0; y < side; ++y) {
       for (int x = 0; x < side; ++x)
-        expected += pixelFootprintRadiance(cam, (b % 4) * side + x, (b / 4) * side + y, 8,
-                                           FloorLight::Sphere);
+        expected +=
+            pixelFootprintRadiance(cam, (b % 4) * side + x, (b / 4) * side + y, 8, lightKind);
     }
     expected /= side * side;
     const MeanEstimate e = meanOfIndependent(blockMeans[b]);
     // The 1e-3 covers the 8 x 8 quadrature of each footprint.
-    EXPECT_NEAR(e.mean, expected, bound * e.standardError + 1e-3 * expected) << "block " << b;
+    EXPECT_NEAR(e.mean, expected, bound * e.standardError + 1e-3 * expected)
+        << "block " << b << ", light " << int(lightKind);
   }
+}
+
+TEST(AnalyticIrradiance, EnergyRedistribution) {
+  expectEnergyRedistributionBlocks(FloorLight::Sphere);
+}
+// Seeds from the path tracer's next-event estimation at a point light and at the back of a
+// two-sided one, spread by perturbations that keep the light vertex.
+TEST(AnalyticIrradiance, EnergyRedistributionPointAndTwoSided) {
+  expectEnergyRedistributionBlocks(FloorLight::Point);
+  expectEnergyRedistributionBlocks(FloorLight::TwoSidedQuad);
 }
 
 }  // namespace

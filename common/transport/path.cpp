@@ -198,7 +198,10 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
       return false;
     const bool isCamera = v.kind == PathVertex::Kind::Camera;
     if (isCamera != (i + 1 == count)) return false;  // the camera, and only it, ends the path
-    if (!isCamera) {
+    if (!isCamera && shape == -1 && i == 0 && v.kind == PathVertex::Kind::Light) {
+      // A point light's position (it has no shape).
+      if (light < 0 || light >= lights || !scene.lights()[size_t(light)].isPoint()) return false;
+    } else if (!isCamera) {
       if (shape < 0 || shape >= shapes) return false;
       if (light != scene.lightOf(shape)) return false;
     } else if (shape != -1 || light != -1) {

@@ -119,21 +119,44 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
     const int index = L + j;
     PathVertex v;
     if (index == 0) {
+      // A light vertex as BDPT starts its light subpaths (Path's densities are BDPT's): a point
+      // light's position, or a point of an area light by area.
       if (scene.lights().empty()) return false;
       float pickPdf;
       int light = scene.pickLight(rng.nextFloat(), &pickPdf);
       float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+      const AreaLight& info = scene.lights()[size_t(light)];
+      if (info.isEnvironment()) return false;  // refused when the scene loads
       v.kind = PathVertex::Kind::Light;
-      scene.sampleLightPoint(light, u, &v.p, &v.n);
-      v.ns = v.n;
-      v.shape = scene.lights()[size_t(light)].shape;
       v.light = light;
+      v.shape = info.shape;
+      if (info.isPoint()) {
+        v.p = scene.pointLight(light).position();
+      } else {
+        scene.sampleLightPoint(light, u, &v.p, &v.n);
+        v.ns = v.n;
+      }
     } else if (index == 1) {
+      // Its emission: a point light's direction by its own distribution, an area light's by the
+      // cosine about the side it emits from (a two-sided light's side by the first number,
+      // rescaled, as BDPT picks it).
       const PathVertex& source = y->vertices[0];
-      Vec3f local = squareToCosineHemisphere({rng.nextFloat(), rng.nextFloat()});
-      if (!(local.z > 0)) return false;
-      if (!traceVertex(context_, source, normalize(Frame(source.n).toWorld(local)), &v))
-        return false;
+      Vec2f u(rng.nextFloat(), rng.nextFloat());
+      Vec3f w;
+      if (onPointLight(source)) {
+        float pdf;
+        w = scene.pointLight(source.light).sampleDirection(u, &pdf);
+        if (!(pdf > 0)) return false;
+      } else {
+        const bool back = scene.lights()[size_t(source.light)].twoSided && u.x >= 0.5f;
+        if (scene.lights()[size_t(source.light)].twoSided)
+          u.x = std::min(back ? 2 * u.x - 1 : 2 * u.x, 0x1.fffffep-1f);
+        Vec3f local = squareToCosineHemisphere(u);
+        if (!(local.z > 0)) return false;
+        if (back) local.z = -local.z;
+        w = normalize(Frame(source.n).toWorld(local));
+      }
+      if (!traceVertex(context_, source, w, &v)) return false;
     } else {
       if (!scatterStep(context_, y->vertices[size_t(index - 1)], y->vertices[size_t(index - 2)],
                        TransportMode::Importance, rng, &v))

@@ -16,6 +16,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,6 +27,7 @@
 #include "common/mcmc/primary_sample_integrand.h"
 #include "common/render/render_job.h"
 #include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
 #include "common/transport/bidirectional.h"
 
 namespace farm {
@@ -128,6 +131,10 @@ void expectPathLengthIntegrals(const std::string& file, int lengths) {
     mutated.mean = s / proposals;
     mutated.stdError =
         std::sqrt(std::max(0.0, s2 / proposals - mutated.mean * mutated.mean) / proposals);
+    if (bdpt.mean == 0) {  // no path of this length carries light (a point light unseen)
+      EXPECT_EQ(mutated.mean, 0) << file << ", paths of " << k << " edges";
+      continue;
+    }
     const double se = std::hypot(bdpt.stdError, mutated.stdError);
     EXPECT_NEAR(mutated.mean, bdpt.mean, kZ * se) << file << ", paths of " << k << " edges";
     EXPECT_LT(se, 0.05 * bdpt.mean) << "too noisy to tell at length " << k;
@@ -139,6 +146,23 @@ void expectPathLengthIntegrals(const std::string& file, int lengths) {
 
 TEST(BidirectionalMutationDensity, RegrowsEveryPathLengthAsBidirectionalPathTracingSeesIt) {
   expectPathLengthIntegrals(kShared + "/scenes/cornell-box/scene.xml", 4);
+}
+
+// Light vertices from a spot light (its position and its cone of directions) and from both
+// sides of a two-sided area light hanging in the middle of the box: their densities are the ones
+// BDPT's MIS uses, which BDPT's own integrals check.
+TEST(BidirectionalMutationDensity, RegrowsPathsFromPointAndTwoSidedLights) {
+  const std::string spot = litBoxScene(
+      "LightSource \"spot\" \"rgb I\" [4 4 4] \"point from\" [0 2.8 1] \"point to\" "
+      "[0.3 0 1.5] \"float coneangle\" 50 \"float conedeltaangle\" 10\n");
+  const std::string twoSided = litBoxScene(
+      "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [3 3 3] \"bool twosided\" true\n"
+      "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.4 2.4 1.2  "
+      "0.4 2.4 1.2  0.4 2.4 2  -0.4 2.4 2]\nAttributeEnd\n");
+  expectPathLengthIntegrals(spot, 4);
+  expectPathLengthIntegrals(twoSided, 4);
+  std::filesystem::remove(spot);
+  std::filesystem::remove(twoSided);
 }
 
 // --- The perturbations integrate to one -------------------------------------------------------
