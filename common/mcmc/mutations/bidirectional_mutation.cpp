@@ -175,6 +175,9 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
       Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
       if (!traceVertex(context_, at, camera.generateRay(film, at.p).d, &v)) return false;
     } else {
+      // Growing past the light (nothing deleted, the whole path kept on this side): a point light
+      // has no surface to scatter from.
+      if (onPointLight(at)) return false;
       const PathVertex& from = j == 0 ? suffix(1) : (j == 1 ? suffix(0) : grown[size_t(j - 2)]);
       if (!scatterStep(context_, at, from, TransportMode::Radiance, rng, &v)) return false;
     }
