@@ -250,6 +250,11 @@ float Bsdf::plasticDiffuseProbability() const {
   return d + g > 0 ? d / (d + g) : 0.5f;
 }
 
+float Bsdf::diffuseProbability(const Vec3f& wo) const {
+  return type_ == BsdfDescription::Type::Plastic ? plasticDiffuseProbability()
+                                                 : 1 - coatedGlossyProbability(wo);
+}
+
 // The coated base (Mitsuba's roughplastic; Weidlich and Wilkie 2007 for the smooth case): light
 // enters through the coat (T(mu_i)), reaches the Lambertian base, bounces between base and coat
 // (each time the coat reflects Fdr of it back down: the geometric series 1 / (1 - rho Fdr), or
@@ -450,8 +455,7 @@ float Bsdf::pdf(const Vec3f& woIn, const Vec3f& wiIn) const {
     case BsdfDescription::Type::Plastic:
     case BsdfDescription::Type::CoatedDiffuse: {
       if (wo.z <= 0 || wi.z <= 0) return 0;
-      const float pd = type_ == BsdfDescription::Type::Plastic ? plasticDiffuseProbability()
-                                                               : 1 - coatedGlossyProbability(wo);
+      const float pd = diffuseProbability(wo);
       float pdf = pd * cosineHemispherePdf(wi.z);
       Vec3f h;
       if (reflectionHalfVector(wo, wi, &h))
@@ -512,8 +516,7 @@ bool Bsdf::sample(const Vec3f& woIn, const float u[3], TransportMode mode, BsdfS
     case BsdfDescription::Type::Plastic:
     case BsdfDescription::Type::CoatedDiffuse: {
       if (wo.z <= 0) return false;
-      const float pd = type_ == BsdfDescription::Type::Plastic ? plasticDiffuseProbability()
-                                                               : 1 - coatedGlossyProbability(wo);
+      const float pd = diffuseProbability(wo);
       Vec3f wi;
       if (u[0] < pd) {
         wi = squareToCosineHemisphere({u[1], u[2]});

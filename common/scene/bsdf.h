@@ -107,6 +107,8 @@ class Bsdf {
   // CoatedDiffuse: the base's value, and the probability of sampling the glossy lobe from wo.
   Spectrum coatedBase(const Vec3f& wo, const Vec3f& wi) const;
   float coatedGlossyProbability(const Vec3f& wo) const;
+  // Plastic and CoatedDiffuse: the probability that sample() takes the diffuse lobe at wo.
+  float diffuseProbability(const Vec3f& wo) const;
 
   BsdfDescription desc_;
   BsdfDescription::Type type_;

@@ -251,6 +251,14 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
   return true;
 }
 
+Vec3f Scene::sampleEmission(int light, Vec2f u) const {
+  const bool back = lights_[light].twoSided && u.x >= 0.5f;
+  if (lights_[light].twoSided) u.x = std::min(back ? 2 * u.x - 1 : 2 * u.x, 0x1.fffffep-1f);
+  Vec3f local = squareToCosineHemisphere(u);
+  if (back) local.z = -local.z;
+  return local;
+}
+
 Bsdf Scene::bsdfAt(int shape, const Vec2f& uv) const {
   Bsdf bsdf = bsdfs_[shapeBsdf_[shape]];
   const int texture = bsdf.description().reflectanceTexture;

@@ -118,6 +118,10 @@ class Scene {
     const float c = dot(n, w);
     return lights_[light].twoSided ? 0.5f * kInvPi * std::fabs(c) : (c > 0 ? c * kInvPi : 0.0f);
   }
+  // A direction of an area light's emission, in its local frame (z along n), with emissionPdf's
+  // density: cosine-weighted about z, or about -z for the back side, which a two-sided light
+  // picks with the first number (rescaled, so that stratified numbers stay stratified).
+  Vec3f sampleEmission(int light, Vec2f u) const;
 
  private:
   float offsetFor(const Vec3f& p) const;

@@ -195,15 +195,8 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   y.pdfFwd = pdfPos;
   y.beta = light.radiance / pdfPos;
   if (maxVertices < 2) return 1;
-  // Area lights emit with a cosine distribution: sample it exactly, so beta keeps pi. A
-  // two-sided light picks its side with the first number (rescaled, to keep stratification).
-  bool back = false;
-  if (light.twoSided) {
-    back = uDir.x >= 0.5f;
-    uDir.x = std::min(back ? 2 * uDir.x - 1 : 2 * uDir.x, 0x1.fffffep-1f);
-  }
-  Vec3f local = squareToCosineHemisphere(uDir);
-  if (back) local.z = -local.z;
+  // Area lights emit with a cosine distribution: sample it exactly, so beta keeps pi.
+  const Vec3f local = scene_.sampleEmission(l, uDir);
   float pdfDir = scene_.emissionPdf(l, Vec3f(0, 0, 1), local);
   if (!(pdfDir > 0)) return 1;
   Vec3f d = Frame(n).toWorld(local);

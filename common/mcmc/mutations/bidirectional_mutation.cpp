@@ -137,9 +137,8 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
         v.ns = v.n;
       }
     } else if (index == 1) {
-      // Its emission: a point light's direction by its own distribution, an area light's by the
-      // cosine about the side it emits from (a two-sided light's side by the first number,
-      // rescaled, as BDPT picks it).
+      // Its emission, as BDPT's light subpaths leave: a point light's direction by its own
+      // distribution, an area light's by Scene::sampleEmission.
       const PathVertex& source = y->vertices[0];
       Vec2f u(rng.nextFloat(), rng.nextFloat());
       Vec3f w;
@@ -148,12 +147,8 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
         w = scene.pointLight(source.light).sampleDirection(u, &pdf);
         if (!(pdf > 0)) return false;
       } else {
-        const bool back = scene.lights()[size_t(source.light)].twoSided && u.x >= 0.5f;
-        if (scene.lights()[size_t(source.light)].twoSided)
-          u.x = std::min(back ? 2 * u.x - 1 : 2 * u.x, 0x1.fffffep-1f);
-        Vec3f local = squareToCosineHemisphere(u);
-        if (!(local.z > 0)) return false;
-        if (back) local.z = -local.z;
+        const Vec3f local = scene.sampleEmission(source.light, u);
+        if (!(local.z != 0)) return false;
         w = normalize(Frame(source.n).toWorld(local));
       }
       if (!traceVertex(context_, source, w, &v)) return false;

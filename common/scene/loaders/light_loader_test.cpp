@@ -44,15 +44,6 @@ std::string pbrtScene(const std::string& world) {
          world;
 }
 
-std::string loadError(const std::string& path) {
-  try {
-    loadSceneDescription(path);
-  } catch (const SceneLoadError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 // Every texel's centre, as a local direction of the given frame, looked up in the world.
 template <typename LocalDirection>
 void expectEveryTexel(const EnvironmentLight& light, const Matrix4& toWorld, float scale,

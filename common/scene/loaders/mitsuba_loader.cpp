@@ -20,7 +20,6 @@
 #include <utility>
 #include <vector>
 
-#include "common/scene/bsdf.h"
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/loaders/serialized_reader.h"
@@ -788,14 +787,10 @@ class MitsubaLoader {
     }
     b->intIOR = float(getIor(props, "intIOR", 1.49));  // polypropylene
     b->extIOR = float(getIor(props, "extIOR", 1.000277));
-    if (b->intIOR == b->extIOR) fail(node, type + ": intIOR and extIOR must differ");
     b->nonlinear = getBoolean(props, "nonlinear", false);
     b->specularReflectance = getSpectrum(props, "specularReflectance", Spectrum(1.0f));
     b->reflectance = getSpectrum(props, "diffuseReflectance", Spectrum(0.5f));
-    for (const Spectrum* v : {&b->reflectance, &b->specularReflectance})
-      if (v->x > 1 || v->y > 1 || v->z > 1)
-        fail(node, type + ": a reflectance above 1 would create energy");
-    b->coating = sharedCoatingTransmittance(b->distribution, b->alpha, b->intIOR / b->extIOR);
+    finishCoatedDiffuse(path_, lineOf(node), type, b);
   }
 
   // The complex index of refraction of a (rough) conductor, and its reflectance scale.

@@ -45,16 +45,6 @@ std::string sceneXml(const std::string& body) {
   return "<?xml version=\"1.0\"?>\n<scene version=\"0.5.0\">\n" + body + "</scene>\n";
 }
 
-// Loads and returns the SceneLoadError's message ("" when it loads).
-std::string loadError(const std::string& path) {
-  try {
-    loadMitsubaScene(path);
-  } catch (const SceneLoadError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 // ---- Matrix4 ----
 
 TEST(Matrix4Test, InverseOfComposite) {
@@ -524,8 +514,8 @@ TEST(MitsubaLoaderTest, PlasticsAreCoatedDiffuse) {
        "unsupported parameter 'fdrInt'"},
   };
   for (const auto& c : bad)
-    expectMitsubaLoadError(
-        dir.write("bad.xml", "<scene version=\"0.5.0\">\n" + c.xml + "\n</scene>"), c.message, 2);
+    expectLoadError(dir.write("bad.xml", "<scene version=\"0.5.0\">\n" + c.xml + "\n</scene>"),
+                    c.message, 2);
 }
 
 // A PLY (ASCII, quads, per-vertex normals) loads as the OBJ of the same mesh: the same triangles

@@ -180,7 +180,7 @@ TEST(MitsubaTexture, UnsupportedTexturesGetAClearError) {
   };
   for (const Bad& c : cases) {
     const std::string path = dir.write("s.xml", sceneXml(c.body));
-    expectMitsubaLoadError(path, c.message, 3);
+    expectLoadError(path, c.message, 3);
   }
 }
 

@@ -10,7 +10,6 @@
 #include <utility>
 #include <vector>
 
-#include "common/scene/bsdf.h"
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/loaders/pbrt_tokenizer.h"
 #include "common/scene/loaders/ply_reader.h"
@@ -942,6 +941,16 @@ class PbrtLoader {
     return alpha;
   }
 
+  // An index of refraction given as one float (`def` without the parameter); a spectral one is
+  // refused.
+  double scalarIndex(Directive& d, const Param* eta, double def) {
+    if (!eta) return def;
+    if (eta->type != "float" || eta->numbers.size() != 1)
+      failParam(d, *eta,
+                "a dispersive (spectral) index of refraction is not supported: give one float");
+    return eta->numbers[0];
+  }
+
   // A diffuse reflectance, which may be a texture (`def` where the material does not give it).
   void readReflectance(Directive& d, const std::string& name, float def, BsdfDescription* b) {
     b->reflectance = Spectrum(def);
@@ -993,13 +1002,7 @@ class PbrtLoader {
       const bool v4 = type == "dielectric";
       Param* etaParam = d.params.find(v4 ? "eta" : "index");
       if (!v4 && !etaParam) etaParam = d.params.find("eta");
-      double eta = 1.5;
-      if (etaParam) {
-        if ((etaParam->type != "float") || etaParam->numbers.size() != 1)
-          failParam(d, *etaParam,
-                    "a dispersive (spectral) index of refraction is not supported: give one float");
-        eta = etaParam->numbers[0];
-      }
+      const double eta = scalarIndex(d, etaParam, 1.5);
       if (!(eta > 0) || eta > 100) fail(d, "index of refraction must be in (0, 100]");
       if (!v4) {
         Spectrum kr(1.0f), kt(1.0f);
@@ -1046,16 +1049,7 @@ class PbrtLoader {
       b.type = BsdfDescription::Type::CoatedDiffuse;
       b.twoSided = true;
       readReflectance(d, "reflectance", 0.5f, &b);
-      if (b.reflectance.x > 1 || b.reflectance.y > 1 || b.reflectance.z > 1)
-        fail(d, what + ": a reflectance above 1 would create energy");
-      Param* etaParam = d.params.find("eta");
-      double eta = 1.5;
-      if (etaParam) {
-        if (etaParam->type != "float" || etaParam->numbers.size() != 1)
-          failParam(d, *etaParam,
-                    "a dispersive (spectral) index of refraction is not supported: give one float");
-        eta = getFloat(d, "eta", 1.5);
-      }
+      const double eta = scalarIndex(d, d.params.find("eta"), 1.5);
       if (!(eta > 0) || eta > 100 || eta == 1)
         fail(d, what + ": the coat's index of refraction must be in (0, 100] and not 1");
       Spectrum albedo(0.0f);
@@ -1073,7 +1067,7 @@ class PbrtLoader {
       b.extIOR = 1.0f;
       b.nonlinear = true;
       b.specularReflectance = Spectrum(1.0f);
-      b.coating = sharedCoatingTransmittance(b.distribution, b.alpha, b.intIOR);
+      finishCoatedDiffuse(d.file, d.line, what, &b);
       warn(d, what +
                   ": rendered in closed form, not by pbrt-v4's random walk; its layer absorbs "
                   "nothing here (pbrt's, of thickness " +

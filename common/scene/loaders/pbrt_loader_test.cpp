@@ -40,15 +40,6 @@ const char* kTriangle =
     "Shape \"trianglemesh\" \"integer indices\" [0 1 2] "
     "\"point P\" [0 0 0  1 0 0  0 1 0]\n";
 
-std::string loadError(const std::string& path) {
-  try {
-    loadPbrtScene(path);
-  } catch (const SceneLoadError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 // ---- The two published scenes ----
 
 TEST(PbrtLoader, CornellBoxPbrtMatchesTheMitsubaScene) {

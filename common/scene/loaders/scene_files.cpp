@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/scene/bsdf.h"
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/mesh_cleanup.h"
 
@@ -171,6 +172,19 @@ double determinant3(const Matrix4& t) {
 }  // namespace farm
 
 namespace farm {
+
+void finishCoatedDiffuse(const std::string& file, int line, const std::string& what,
+                         BsdfDescription* b) {
+  for (const Spectrum* v : {&b->reflectance, &b->specularReflectance})
+    if (v->x > 1 || v->y > 1 || v->z > 1)
+      throw SceneLoadError(file, line, what + ": a reflectance above 1 would create energy");
+  if (b->intIOR == b->extIOR)
+    throw SceneLoadError(file, line,
+                         what +
+                             ": intIOR and extIOR must differ (the coat's index and the "
+                             "outside's)");
+  b->coating = sharedCoatingTransmittance(b->distribution, b->alpha, b->intIOR / b->extIOR);
+}
 
 EnvironmentDescription makeEnvironment(const fs::path& dir, const std::string& file, int line,
                                        const Spectrum& scale, const Matrix4& lightToWorld,

@@ -88,6 +88,12 @@ double determinant3(const Matrix4& t);
 enum class Similarity { Uniform, NonUniformScale, Shear };
 Similarity similarityOf(const Matrix4& t, double* scale);
 
+// The last step of both loaders' coated diffuse (bsdf.h's CoatedDiffuse, `what` naming it for
+// messages): reflectances above 1 and equal indices of refraction are SceneLoadErrors at
+// file:line; then the coat's table, shared with identical coats.
+void finishCoatedDiffuse(const std::string& file, int line, const std::string& what,
+                         BsdfDescription* b);
+
 // An environment light as both loaders describe it (see EnvironmentDescription): `lightToWorld`
 // in pbrt's frame (z up) must be a rotation, possibly mirrored and uniformly scaled; `filename`
 // (in the scene's folder `dir`; empty for a constant) a lat-long map, twice as wide as high, or

@@ -235,7 +235,7 @@ TEST(SerializedMesh, LoaderErrorsNameFileAndLine) {
     const std::string path =
         dir.write("s.xml", "<scene version=\"0.6.0\">\n\n<shape type=\"serialized\">" + c.shape +
                                "</shape>\n</scene>\n");
-    expectMitsubaLoadError(path, c.message, 3);
+    expectLoadError(path, c.message, 3);
   }
 }
 

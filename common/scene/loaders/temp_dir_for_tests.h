@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "common/scene/loaders/mitsuba_loader.h"
 #include "common/scene/loaders/scene_files.h"
+#include "common/scene/loaders/scene_loader.h"
 
 namespace farm {
 
@@ -40,10 +40,21 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-// That loading the Mitsuba scene at `path` fails at `line` with a message containing `message`.
-inline void expectMitsubaLoadError(const std::string& path, const std::string& message, int line) {
+// The SceneLoadError's message for the scene file at `path` (either format, by its extension),
+// or "" when it loads.
+inline std::string loadError(const std::string& path) {
   try {
-    loadMitsubaScene(path);
+    loadSceneDescription(path);
+  } catch (const SceneLoadError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// That loading the scene at `path` fails at `line` with a message containing `message`.
+inline void expectLoadError(const std::string& path, const std::string& message, int line) {
+  try {
+    loadSceneDescription(path);
     ADD_FAILURE() << "accepted a scene that should fail with: " << message;
   } catch (const SceneLoadError& e) {
     EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
