@@ -72,7 +72,9 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       ->add_option("--mutation-mix", o->mutationMix,
                    "mlt: relative weights of Veach's mutations, normalized over those that apply "
                    "to the current path: bidir (bidirectional), lens-subpath, lens (lens "
-                   "perturbation), caustic, multichain; names left out keep their defaults")
+                   "perturbation), caustic, multichain, manifold (manifold exploration: the lens "
+                   "perturbation with a manifold walk through the specular chain below); names "
+                   "left out keep their defaults")
       ->default_str(farm::formatMutationMix(farm::MutationMix()));
   command
       ->add_option("--erpt-chains", o->erptChains,

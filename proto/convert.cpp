@@ -19,18 +19,21 @@ void toProto(const MutationMix& mix, v1::MutationMix* m) {
   m->set_lens_perturbation(mix.lensPerturbation);
   m->set_caustic_perturbation(mix.causticPerturbation);
   m->set_multi_chain_perturbation(mix.multiChainPerturbation);
+  m->set_manifold_perturbation(mix.manifoldPerturbation);
 }
 
 // An absent mix (all zero) is the default one; any other must be usable.
 bool fromProto(const v1::MutationMix& m, MutationMix* out, std::string* error) {
   MutationMix mix;
   if (m.bidirectional() != 0 || m.lens_subpath() != 0 || m.lens_perturbation() != 0 ||
-      m.caustic_perturbation() != 0 || m.multi_chain_perturbation() != 0) {
+      m.caustic_perturbation() != 0 || m.multi_chain_perturbation() != 0 ||
+      m.manifold_perturbation() != 0) {
     mix.bidirectional = m.bidirectional();
     mix.lensSubpath = m.lens_subpath();
     mix.lensPerturbation = m.lens_perturbation();
     mix.causticPerturbation = m.caustic_perturbation();
     mix.multiChainPerturbation = m.multi_chain_perturbation();
+    mix.manifoldPerturbation = m.manifold_perturbation();
   }
   std::string problem = validateMutationMix(mix);
   if (!problem.empty()) {

@@ -29,6 +29,7 @@ constexpr MixField kMixFields[] = {
     {"lens", &MutationMix::lensPerturbation},
     {"caustic", &MutationMix::causticPerturbation},
     {"multichain", &MutationMix::multiChainPerturbation},
+    {"manifold", &MutationMix::manifoldPerturbation},
 };
 
 }  // namespace
@@ -80,8 +81,8 @@ bool parseMutationMix(const std::string& text, MutationMix* out, std::string* er
       if (name == f.name) field = &f;
     }
     if (!field) {
-      *error =
-          "unknown mutation '" + name + "' (known: bidir, lens-subpath, lens, caustic, multichain)";
+      *error = "unknown mutation '" + name +
+               "' (known: bidir, lens-subpath, lens, caustic, multichain, manifold)";
       return false;
     }
     if (eq == std::string::npos) {

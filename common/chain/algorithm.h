@@ -49,6 +49,7 @@ struct MutationMix {
   double lensPerturbation = 0.2;
   double causticPerturbation = 0.15;
   double multiChainPerturbation = 0.15;
+  double manifoldPerturbation = 0;
 
   bool operator==(const MutationMix& o) const;
 };

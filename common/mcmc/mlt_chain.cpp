@@ -61,9 +61,11 @@ PathChain::PathChain(const Scene& scene, int maxDepth, const MutationMix& mix)
       lens_(context_),
       caustic_(context_),
       multiChain_(context_),
-      mutations_{&bidirectional_, &lensSubpath_, &lens_, &caustic_, &multiChain_},
-      weights_{mix.bidirectional, mix.lensSubpath, mix.lensPerturbation, mix.causticPerturbation,
-               mix.multiChainPerturbation} {}
+      manifold_(context_),
+      mutations_{&bidirectional_, &lensSubpath_, &lens_, &caustic_, &multiChain_, &manifold_},
+      weights_{mix.bidirectional,          mix.lensSubpath,
+               mix.lensPerturbation,       mix.causticPerturbation,
+               mix.multiChainPerturbation, mix.manifoldPerturbation} {}
 
 PathChain::Selection PathChain::select(const Path& x) const {
   Selection s;
@@ -97,7 +99,16 @@ void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* f
     }
     const Mutation& mutation = *mutations_[chosen];
     MutationRecord record;
-    if (mutation.propose(x_, rng, &y_, &record)) {
+    const ManifoldWalkStats walksBefore = manifold_.walkStats();
+    const bool proposed = mutation.propose(x_, rng, &y_, &record);
+    if (flusher && &mutation == &manifold_) {
+      // The walks it ran (forward, and back to check the move reversible), and which converged.
+      const ManifoldWalkStats& after = manifold_.walkStats();
+      const uint64_t converged = after.converged - walksBefore.converged;
+      for (uint64_t i = 0; i < after.walks - walksBefore.walks; ++i)
+        flusher->tally("manifold walk", i < converged);
+    }
+    if (proposed) {
       fy = y_.contribution(scene_, context_.maxDepth);
       if (fy.carriesLight()) {
         sy = select(y_);

@@ -15,6 +15,7 @@
 #include "common/mcmc/mutations/caustic_perturbation.h"
 #include "common/mcmc/mutations/lens_perturbation.h"
 #include "common/mcmc/mutations/lens_subpath_mutation.h"
+#include "common/mcmc/mutations/manifold_perturbation.h"
 #include "common/mcmc/mutations/multi_chain_perturbation.h"
 #include "common/scene/scene.h"
 
@@ -49,6 +50,7 @@ class PathChain {
   LensPerturbation lens_;
   CausticPerturbation caustic_;
   MultiChainPerturbation multiChain_;
+  ManifoldPerturbation manifold_;
   const Mutation* mutations_[kMutationTypes];
   double weights_[kMutationTypes];
   Path x_, y_;

@@ -29,6 +29,7 @@
 #include "common/mcmc/mutations/caustic_perturbation.h"
 #include "common/mcmc/mutations/lens_perturbation.h"
 #include "common/mcmc/mutations/lens_subpath_mutation.h"
+#include "common/mcmc/mutations/manifold_perturbation.h"
 #include "common/mcmc/mutations/multi_chain_perturbation.h"
 #include "common/mcmc/primary_sample_integrand.h"
 #include "common/render/render_job.h"
@@ -75,9 +76,9 @@ BootstrapResult bootstrapSeeds(const std::shared_ptr<Scene>& scene, int chains, 
 
 struct Mutations {
   explicit Mutations(const MutationContext& c)
-      : bidirectional(c), lensSubpath(c), lens(c), caustic(c), multiChain(c) {}
+      : bidirectional(c), lensSubpath(c), lens(c), caustic(c), multiChain(c), manifold(c) {}
   const Mutation* get(MutationType t) const {
-    const Mutation* all[] = {&bidirectional, &lensSubpath, &lens, &caustic, &multiChain};
+    const Mutation* all[] = {&bidirectional, &lensSubpath, &lens, &caustic, &multiChain, &manifold};
     return all[int(t)];
   }
   BidirectionalMutation bidirectional;
@@ -85,6 +86,7 @@ struct Mutations {
   LensPerturbation lens;
   CausticPerturbation caustic;
   MultiChainPerturbation multiChain;
+  ManifoldPerturbation manifold;
 };
 
 // --- Detailed balance ------------------------------------------------------------------------
@@ -138,7 +140,10 @@ void expectDetailedBalance(const std::string& file, int minimumChecked) {
                 std::filesystem::path(file).filename().c_str(), mutationName(MutationType(t)),
                 checked, irreversible);
     EXPECT_LE(irreversible, checked / 10) << mutationName(MutationType(t));
-    if (t != int(MutationType::MultiChainPerturbation) || file != cornellBox()) {
+    // The Cornell box has no specular surface for the multi-chain and manifold perturbations.
+    const bool specularOnly = t == int(MutationType::MultiChainPerturbation) ||
+                              t == int(MutationType::ManifoldPerturbation);
+    if (!specularOnly || file != cornellBox()) {
       EXPECT_GE(checked, minimumChecked) << mutationName(MutationType(t));
     }
   }
@@ -285,9 +290,10 @@ void expectStationary(const Scene& scene, const ResampledTarget& target, const S
     spec.budget = mutations;
     spec.flushInterval = mutations;
     spec.seedPath = seeds[c];
-    MutationMix only{0, 0, 0, 0, 0};
-    double* weights[] = {&only.bidirectional, &only.lensSubpath, &only.lensPerturbation,
-                         &only.causticPerturbation, &only.multiChainPerturbation};
+    MutationMix only{0, 0, 0, 0, 0, 0};
+    double* weights[] = {&only.bidirectional,          &only.lensSubpath,
+                         &only.lensPerturbation,       &only.causticPerturbation,
+                         &only.multiChainPerturbation, &only.manifoldPerturbation};
     *weights[int(type)] = 1;
     spec.mutationMix = only;
     std::vector<double> block(blocks, 0.0);
@@ -358,9 +364,9 @@ TEST(MltChain, StationaryAroundTheGlassBall) {
   Shares none;
   none.mean = target.shares.mean;  // the reference is the same BDPT estimate (its error counted)
   none.stdError.assign(none.mean.size(), 0.0);
-  for (MutationType t :
-       {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::LensPerturbation,
-        MutationType::CausticPerturbation, MutationType::MultiChainPerturbation})
+  for (MutationType t : {MutationType::Bidirectional, MutationType::LensSubpath,
+                         MutationType::LensPerturbation, MutationType::CausticPerturbation,
+                         MutationType::MultiChainPerturbation, MutationType::ManifoldPerturbation})
     expectStationary(*scene, target, none, t, 480, 4000);
 }
 

@@ -23,15 +23,6 @@ namespace {
 
 const Spectrum kSky(1.0f, 0.5f, 2.0f);
 
-ShapeDescription sphere(const Vec3f& center, float radius, int bsdf) {
-  ShapeDescription s;
-  s.type = ShapeDescription::Type::Sphere;
-  s.center = center;
-  s.radius = radius;
-  s.bsdf = bsdf;
-  return s;
-}
-
 // A camera at the origin looking down +z (or -z, at nothing but sky) at a large sphere that
 // fills its view, and optionally a small one in front of it that the two reflect between.
 // coated: the spheres are white under a clear coat of roughness 1e-3 (Mitsuba's roughplastic),
@@ -53,8 +44,8 @@ SceneDescription skyFurnace(float albedo, bool smallSphere, bool lookAway = fals
     b.coating = sharedCoatingTransmittance(b.distribution, b.alpha, b.intIOR);
   }
   d.bsdfs.push_back(b);
-  d.shapes.push_back(sphere(Vec3f(0, 0, 6), 4.5f, 0));  // 48.6 degrees wide: the whole view
-  if (smallSphere) d.shapes.push_back(sphere(Vec3f(0.3f, 0.2f, 1.1f), 0.25f, 0));
+  d.shapes.push_back(sphereShape(Vec3f(0, 0, 6), 4.5f, 0));  // 48.6 degrees wide: the whole view
+  if (smallSphere) d.shapes.push_back(sphereShape(Vec3f(0.3f, 0.2f, 1.1f), 0.25f, 0));
   d.environment.present = true;
   d.environment.scale = kSky;
   return d;
@@ -133,8 +124,8 @@ SceneDescription imageSkyScene(bool equalArea = false) {
   ground.indices = {0, 2, 1, 0, 3, 2};
   ground.bsdf = 0;
   d.shapes.push_back(ground);
-  d.shapes.push_back(sphere(Vec3f(-0.5f, 0.6f, 3), 0.6f, 1));
-  d.shapes.push_back(sphere(Vec3f(0.9f, 0.4f, 2.4f), 0.4f, 0));
+  d.shapes.push_back(sphereShape(Vec3f(-0.5f, 0.6f, 3), 0.6f, 1));
+  d.shapes.push_back(sphereShape(Vec3f(0.9f, 0.4f, 2.4f), 0.4f, 0));
   d.environment.present = true;
   d.environment.image = equalArea ? equalAreaSky() : latLongSky(40);
   if (equalArea) d.environment.mapping = EnvironmentDescription::Mapping::EqualArea;

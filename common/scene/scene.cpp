@@ -251,6 +251,57 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
   return true;
 }
 
+int Scene::primitiveCount(int shape) const {
+  const ShapeDescription& s = desc_.shapes[size_t(shape)];
+  return s.type == ShapeDescription::Type::Sphere ? 1 : int(s.indices.size() / 3);
+}
+
+bool Scene::surfaceDifferential(int shape, int primitive, const Vec3f& p, const Vec3f& ng,
+                                SurfaceDifferential* out) const {
+  if (shape < 0 || shape >= int(desc_.shapes.size())) return false;
+  const ShapeDescription& s = desc_.shapes[size_t(shape)];
+  const Frame tangent(ng);
+  out->dpdu = tangent.s;
+  out->dpdv = tangent.t;
+  if (s.type == ShapeDescription::Type::Sphere) {
+    // ns = +-(p - c) / r: it turns by d / r along a tangent d.
+    const float sign = s.flipNormals ? -1.0f : 1.0f;
+    out->ns = normalize(p - s.center) * sign;
+    out->dndu = out->dpdu * (sign / s.radius);
+    out->dndv = out->dpdv * (sign / s.radius);
+    return true;
+  }
+  if (primitive < 0 || primitive >= primitiveCount(shape)) return false;
+  const uint32_t* tri = &s.indices[3 * size_t(primitive)];
+  const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
+  const Vec3f e1 = b - a, e2 = c - a, n = cross(e1, e2);
+  const float n2 = lengthSquared(n);
+  if (!(n2 > 0)) return false;
+  // Gradients of the barycentric weights of b and c over the triangle's plane (dual basis).
+  const Vec3f g1 = cross(e2, n) / n2, g2 = cross(n, e1) / n2;
+  const float w1 = dot(p - a, g1), w2 = dot(p - a, g2);
+  Vec3f ngUnused, ns;
+  if (!triangleNormals(s, uint32_t(primitive), 1 - w1 - w2, w1, w2, &ngUnused, &ns)) return false;
+  out->ns = ns;
+  out->dndu = out->dndv = Vec3f(0.0f);
+  if (s.faceNormals || s.normals.empty()) return true;
+  const Vec3f &n0 = s.normals[tri[0]], &n1 = s.normals[tri[1]], &n2v = s.normals[tri[2]];
+  const Vec3f interpolated = n0 * (1 - w1 - w2) + n1 * w1 + n2v * w2;
+  const float len = length(interpolated);
+  if (!(len > 0) || !std::isfinite(len)) return true;  // triangleNormals fell back to the face's
+  const Vec3f unit = interpolated / len;
+  // d(N / |N|) = (dN - unit (unit . dN)) / |N|, with dN the change of the interpolated normal
+  // along the tangent; flipNormals turns both.
+  const float sign = s.flipNormals ? -1.0f : 1.0f;
+  for (int k = 0; k < 2; ++k) {
+    const Vec3f d = k == 0 ? out->dpdu : out->dpdv;
+    const Vec3f dN = (n1 - n0) * dot(g1, d) + (n2v - n0) * dot(g2, d);
+    const Vec3f dn = (dN - unit * dot(unit, dN)) * (sign / len);
+    (k == 0 ? out->dndu : out->dndv) = dn;
+  }
+  return true;
+}
+
 Vec3f Scene::sampleEmission(int light, Vec2f u) const {
   const bool back = lights_[light].twoSided && u.x >= 0.5f;
   if (lights_[light].twoSided) u.x = std::min(back ? 2 * u.x - 1 : 2 * u.x, 0x1.fffffep-1f);

@@ -22,6 +22,16 @@ struct SurfaceHit {
   uint32_t primitive = 0;
 };
 
+// The first-order geometry of a surface around one of its points, which the manifold walk
+// differentiates specular constraints with (Jakob and Marschner 2012, section 4): an orthonormal
+// basis (dpdu, dpdv) of the tangent plane (perpendicular to the geometric normal), the unit
+// shading normal ns and its derivatives along dpdu and dpdv (zero where the shading normal is
+// the face's own; the derivative of the normalized interpolated vertex normal on a smooth mesh).
+struct SurfaceDifferential {
+  Vec3f dpdu, dpdv;
+  Vec3f ns, dndu, dndv;
+};
+
 // A light: one emitting shape, sampled uniformly by area, emitting on its normal's side; or a
 // point light (point >= 0: Scene::pointLight()); or, with neither, the environment
 // (Scene::environment()), whose path vertices lie at infinity.
@@ -72,6 +82,14 @@ class Scene {
   bool escapes(const Vec3f& p, const Vec3f& ng, const Vec3f& w) const;
   // A ray leaving surface point p (geometric normal ng) in direction d, offset off the surface.
   Ray spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const;
+
+  // Triangles of a mesh shape (1 for a sphere): the range of a path vertex's primitive.
+  int primitiveCount(int shape) const;
+  // The differential geometry at point p of triangle `primitive` of `shape` (any value for a
+  // sphere), whose geometric normal there is ng; false for a degenerate triangle or an index out
+  // of range.
+  bool surfaceDifferential(int shape, int primitive, const Vec3f& p, const Vec3f& ng,
+                           SurfaceDifferential* out) const;
 
   // The shape's BSDF as its description gives it: what does not depend on textures (its type,
   // its Dirac lobes) may be read here.

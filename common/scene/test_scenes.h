@@ -13,6 +13,25 @@
 
 namespace farm {
 
+// A parallelogram of two triangles from `corner` along two edges, its normal edge1 x edge2.
+inline ShapeDescription quadShape(const Vec3f& corner, const Vec3f& edge1, const Vec3f& edge2,
+                                  int bsdf) {
+  ShapeDescription s;
+  s.positions = {corner, corner + edge1, corner + edge1 + edge2, corner + edge2};
+  s.indices = {0, 1, 2, 0, 2, 3};
+  s.bsdf = bsdf;
+  return s;
+}
+
+inline ShapeDescription sphereShape(const Vec3f& center, float radius, int bsdf) {
+  ShapeDescription s;
+  s.type = ShapeDescription::Type::Sphere;
+  s.center = center;
+  s.radius = radius;
+  s.bsdf = bsdf;
+  return s;
+}
+
 // A closed diffuse sphere of albedo `albedo` that emits `radiance` towards its inside, seen from
 // a 90-degree camera at the origin: radiance Le (1 - albedo^D) / (1 - albedo) everywhere for
 // paths of at most D edges, and a path of k edges carries Le albedo^(k-1).

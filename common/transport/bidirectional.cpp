@@ -62,6 +62,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
     v.uv = hit.uv;
     v.wo = -ray.d;
     v.shape = hit.shape;
+    v.primitive = int(hit.primitive);
     v.light = scene_.lightOf(hit.shape);
     v.beta = beta;
     // After the environment, pdfDir is the density of the disk the ray left (in the plane

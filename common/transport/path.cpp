@@ -53,7 +53,7 @@ class ScaledProduct {
   bool ok_ = true;
 };
 
-constexpr uint32_t kPathMagic = 0x32485450;  // "PTH2": with texture coordinates
+constexpr uint32_t kPathMagic = 0x33485450;  // "PTH3": with texture coordinates and triangles
 
 }  // namespace
 
@@ -166,6 +166,7 @@ std::string Path::serialize() const {
     appendBytes(s, v.uv);
     appendBytes(s, int32_t(v.shape));
     appendBytes(s, int32_t(v.light));
+    appendBytes(s, int32_t(v.primitive));
   }
   return s;
 }
@@ -175,7 +176,7 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
   uint32_t magic, count;
   if (!readBytes(bytes, at, &magic) || magic != kPathMagic || !readBytes(bytes, at, &count))
     return false;
-  constexpr size_t kVertexBytes = 1 + 11 * sizeof(float) + 2 * sizeof(int32_t);
+  constexpr size_t kVertexBytes = 1 + 11 * sizeof(float) + 3 * sizeof(int32_t);
   if (count < 2 || count > (bytes.size() - at) / kVertexBytes) return false;
   const int shapes = int(scene.description().shapes.size());
   const int lights = int(scene.lights().size());
@@ -183,16 +184,17 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
   for (uint32_t i = 0; i < count; ++i) {
     PathVertex& v = read[i];
     uint8_t kind;
-    int32_t shape, light;
+    int32_t shape, light, primitive;
     if (!readBytes(bytes, at, &kind) || !readBytes(bytes, at, &v.p) ||
         !readBytes(bytes, at, &v.n) || !readBytes(bytes, at, &v.ns) ||
         !readBytes(bytes, at, &v.uv) || !readBytes(bytes, at, &shape) ||
-        !readBytes(bytes, at, &light))
+        !readBytes(bytes, at, &light) || !readBytes(bytes, at, &primitive))
       return false;
     if (kind > uint8_t(PathVertex::Kind::Surface)) return false;
     v.kind = PathVertex::Kind(kind);
     v.shape = shape;
     v.light = light;
+    v.primitive = primitive;
     if (!isFinite(v.p) || !isFinite(v.n) || !isFinite(v.ns) || !std::isfinite(v.uv.x) ||
         !std::isfinite(v.uv.y))
       return false;
@@ -200,11 +202,14 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
     if (isCamera != (i + 1 == count)) return false;  // the camera, and only it, ends the path
     if (!isCamera && shape == -1 && i == 0 && v.kind == PathVertex::Kind::Light) {
       // A point light's position (it has no shape).
-      if (light < 0 || light >= lights || !scene.lights()[size_t(light)].isPoint()) return false;
+      if (light < 0 || light >= lights || !scene.lights()[size_t(light)].isPoint() ||
+          primitive != -1)
+        return false;
     } else if (!isCamera) {
       if (shape < 0 || shape >= shapes) return false;
       if (light != scene.lightOf(shape)) return false;
-    } else if (shape != -1 || light != -1) {
+      if (primitive < -1 || primitive >= scene.primitiveCount(shape)) return false;
+    } else if (shape != -1 || light != -1 || primitive != -1) {
       return false;
     }
   }

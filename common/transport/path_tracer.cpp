@@ -57,6 +57,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       v.ns = hit.ns;
       v.uv = hit.uv;
       v.shape = hit.shape;
+      v.primitive = int(hit.primitive);
       v.light = light;
       vertices->push_back(v);
     }

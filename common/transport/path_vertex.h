@@ -18,6 +18,7 @@ struct PathVertex {
   Vec3f wo;  // unit direction to the previous vertex of its own subpath
   Vec2f uv;  // texture coordinates, where the BSDF is looked up (Scene::bsdfAt)
   int shape = -1;
+  int primitive = -1;     // the shape's triangle (0 for a sphere), or -1 where not known
   int light = -1;         // the area light this vertex lies on, or -1
   Spectrum beta;          // subpath throughput up to here, divided by the sampling densities
   float pdfFwd = 0;       // area density of this vertex, sampled from its own subpath's side

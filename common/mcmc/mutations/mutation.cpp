@@ -1,5 +1,6 @@
 #include "common/mcmc/mutations/mutation.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/scene/scene.h"
@@ -18,6 +19,8 @@ const char* mutationName(MutationType type) {
       return "caustic";
     case MutationType::MultiChainPerturbation:
       return "multichain";
+    case MutationType::ManifoldPerturbation:
+      return "manifold";
   }
   return "?";
 }
@@ -36,6 +39,7 @@ bool traceVertex(const MutationContext& context, const PathVertex& from, const V
   hit->ns = h.ns;
   hit->uv = h.uv;
   hit->shape = h.shape;
+  hit->primitive = int(h.primitive);
   hit->light = scene.lightOf(h.shape);
   return true;
 }
@@ -77,8 +81,22 @@ double angleBetween(const Vec3f& a, const Vec3f& b) {
   return std::atan2(double(length(cross(a, b))), double(dot(a, b)));
 }
 
+namespace {
+
+// A perturbation's size measured back from the two paths (by projecting, or by the angle between
+// traced directions) differs from the one drawn by rounding: one drawn at a bound can come out a
+// hair beyond it, where the density would read 0 (and the move's ratio infinity). Within 1e-4 of
+// a bound it is taken to be on it.
+bool clampToRange(double* v, double lo, double hi) {
+  if (!(*v >= lo * (1 - 1e-4) && *v <= hi * (1 + 1e-4))) return false;
+  *v = std::min(std::max(*v, lo), hi);
+  return true;
+}
+
+}  // namespace
+
 double logAnglePerturbationDensity(double theta, double theta1, double theta2) {
-  if (!(theta >= theta1 && theta <= theta2) || !(theta > 0)) return -INFINITY;
+  if (!clampToRange(&theta, theta1, theta2) || !(theta > 0)) return -INFINITY;
   return -std::log(2 * M_PI * std::sin(theta) * theta * std::log(theta2 / theta1));
 }
 
@@ -92,7 +110,7 @@ Vec3f perturbDirection(const Vec3f& w, double theta1, double theta2, Rng& rng) {
 }
 
 double logFilmPerturbationDensity(double r, double r1, double r2) {
-  if (!(r >= r1 && r <= r2)) return -INFINITY;
+  if (!clampToRange(&r, r1, r2)) return -INFINITY;
   return -std::log(2 * M_PI * r * r * std::log(r2 / r1));
 }
 

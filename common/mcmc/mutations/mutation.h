@@ -26,8 +26,9 @@ enum class MutationType : uint8_t {
   LensPerturbation,
   CausticPerturbation,
   MultiChainPerturbation,
+  ManifoldPerturbation,
 };
-constexpr int kMutationTypes = 5;
+constexpr int kMutationTypes = 6;
 const char* mutationName(MutationType type);  // "bidir", "lens-subpath", "lens", ...
 
 struct MutationRecord {

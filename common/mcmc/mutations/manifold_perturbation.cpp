@@ -1,0 +1,74 @@
+#include "common/mcmc/mutations/manifold_perturbation.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/mcmc/mutations/lens_perturbation.h"
+#include "common/scene/scene.h"
+#include "common/transport/specular_manifold.h"
+
+namespace farm {
+
+namespace {
+
+// Whether the reverse walk found x's chain: each vertex where x has it, up to a thousandth of
+// its shorter edge (the walks converge to a millionth of the scene; another solution of the
+// constraints lies a visible distance away).
+bool sameChain(const Path& x, const Path& back, int e, int m) {
+  for (int i = e + 1; i < m; ++i) {
+    const double edge =
+        std::min(double(length(x[i].p - x[i - 1].p)), double(length(x[i + 1].p - x[i].p)));
+    if (!(double(length(back[i].p - x[i].p)) <= 1e-3 * edge)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+ManifoldPerturbation::ManifoldPerturbation(const MutationContext& context)
+    : Mutation(context), sizes_(perturbationSizes(context.scene.camera())) {}
+
+bool ManifoldPerturbation::chainOf(const Path& x, int* e, int* m) const {
+  const Scene& scene = context_.scene;
+  if (x.vertices.size() < 4) return false;
+  *m = firstNonSpecularFromCamera(scene, x);
+  if (*m < 2 || !x.isSpecular(scene, *m - 1)) return false;
+  *e = *m - 1;
+  while (*e > 0 && x.isSpecular(scene, *e)) --*e;
+  return isSpecularChain(scene, x, *e, *m);
+}
+
+bool ManifoldPerturbation::appliesTo(const Path& x) const {
+  int e, m;
+  return chainOf(x, &e, &m);
+}
+
+bool ManifoldPerturbation::propose(const Path& x, Rng& rng, Path* y, MutationRecord* record) const {
+  int e, m;
+  const int k = x.length();
+  if (!chainOf(x, &e, &m)) return false;
+  *record = {MutationType::ManifoldPerturbation, e + 1, 1, k - 1 - e, k - 1 - e};
+  Path lens;
+  if (!perturbLensChain(context_, sizes_, x, m, rng, &lens)) return false;
+  if (!manifoldWalk(context_, x, e, m, lens[m], y, &stats_)) return false;
+  for (int i = m + 1; i <= k; ++i) (*y)[i] = lens[i];
+  Path back;
+  if (!manifoldWalk(context_, *y, e, m, x[m], &back, &stats_) || !sameChain(x, back, e, m)) {
+    ++irreversible_;
+    return false;
+  }
+  return true;
+}
+
+double ManifoldPerturbation::logDensity(const Path& from, const Path& to,
+                                        const MutationRecord& r) const {
+  int e, m, fromE, fromM;
+  if (from.length() != to.length() || !chainOf(to, &e, &m) || !chainOf(from, &fromE, &fromM) ||
+      e != fromE || m != fromM || r.keptLight != e + 1)
+    return -INFINITY;
+  const double logT = logLensChainDensity(context_, sizes_, from, to, m) +
+                      logSpecularChainMeasureRatio(context_.scene, to, e, m);
+  return std::isfinite(logT) ? logT : -INFINITY;
+}
+
+}  // namespace farm

@@ -1,0 +1,89 @@
+#include "common/mcmc/mutations/manifold_walk.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/scene/scene.h"
+#include "common/transport/specular_manifold.h"
+
+namespace farm {
+
+namespace {
+
+constexpr int kMaxSteps = 24;
+constexpr double kSmallestStep = 1.0 / 1024;
+
+// x_{a+1} .. x_b of `trial` traced from trial[a] in direction w through x's lobes, on x's shapes
+// for the specular vertices.
+bool project(const MutationContext& context, const Path& x, int a, int b, const Vec3f& w,
+             Path* trial) {
+  if (!followSpecularChain(context, x, trial, a, b, w)) return false;
+  for (int i = a + 1; i < b; ++i) {
+    if ((*trial)[i].shape != x[i].shape) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+double manifoldWalkTolerance(const Scene& scene, const Vec3f& target) {
+  return 1e-6 * (double(maxAbsComponent(target)) + double(scene.extent()));
+}
+
+bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
+                  const PathVertex& target, Path* y, ManifoldWalkStats* stats,
+                  std::vector<double>* residuals) {
+  const Scene& scene = context.scene;
+  if (stats) ++stats->walks;
+  if (!isSpecularChain(scene, x, a, b) || target.kind != PathVertex::Kind::Surface) return false;
+  const double tolerance = manifoldWalkTolerance(scene, target.p);
+  Path current = x;
+  double beta = 1;
+  for (int step = 0;; ++step) {
+    const Vec3f r = target.p - current[b].p;
+    const double distance = double(length(r));
+    if (residuals) residuals->push_back(distance);
+    if (distance < tolerance) break;
+    if (step == kMaxSteps) return false;
+    if (stats) ++stats->iterations;
+    // Newton: the end should move by r (in its tangent plane); x_{a+1} by the derivative times it.
+    SurfaceDifferential end, first;
+    Matrix2 d;
+    if (!scene.surfaceDifferential(current[b].shape, current[b].primitive, current[b].p,
+                                   current[b].n, &end) ||
+        !scene.surfaceDifferential(current[a + 1].shape, current[a + 1].primitive, current[a + 1].p,
+                                   current[a + 1].n, &first) ||
+        !specularChainDerivative(scene, current, a, b, true, &d))
+      return false;
+    const double du = dot(r, end.dpdu), dv = dot(r, end.dpdv);
+    const double su = d.m[0][0] * du + d.m[0][1] * dv, sv = d.m[1][0] * du + d.m[1][1] * dv;
+    bool moved = false;
+    while (!moved) {
+      const Vec3f q =
+          current[a + 1].p + first.dpdu * float(beta * su) + first.dpdv * float(beta * sv);
+      Path trial = current;
+      // Aimed from where the ray leaves x_a (a little off its surface), so that it meets x_{a+1}'s
+      // surface at q itself: aimed from x_a, it would land a little beside q, the same little
+      // every step, and the walk would stall there.
+      const Vec3f w = normalize(q - scene.spawnRay(current[a].p, current[a].n, q - current[a].p).o);
+      if (project(context, x, a, b, w, &trial) &&
+          double(length(target.p - trial[b].p)) < distance) {
+        current = std::move(trial);
+        beta = std::min(1.0, 2 * beta);
+        moved = true;
+      } else {
+        if (stats) ++stats->halvings;
+        beta *= 0.5;
+        if (beta < kSmallestStep) return false;
+      }
+    }
+  }
+  // The chain ends at the target itself, which it reaches unoccluded.
+  current[b] = target;
+  if (!connectVertices(context, current[b - 1], current[b])) return false;
+  if (stats) ++stats->converged;
+  *y = std::move(current);
+  return true;
+}
+
+}  // namespace farm

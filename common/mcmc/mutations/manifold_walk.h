@@ -1,0 +1,36 @@
+#pragma once
+// The manifold walk (Jakob and Marschner 2012, section 4.2): moves the end x_b of a specular
+// chain x_a .. x_b (x_a held, x_{a+1} .. x_{b-1} specular) to a target point while the chain
+// stays on its specular manifold. Each Newton step takes the derivative of x_{a+1} with respect
+// to x_b (specular_manifold.h), moves x_{a+1} in its tangent plane by the step the target calls
+// for, and projects back onto the manifold by ray tracing from x_a through the new x_{a+1} and
+// each specular vertex's lobe (reflection or refraction, as in x) to where the chain now ends.
+// A projection that misses, meets another shape or does not come closer halves the step.
+#include <cstdint>
+#include <vector>
+
+#include "common/mcmc/mutations/mutation.h"
+
+namespace farm {
+
+// What the walks did: counted, so that failures show in the report rather than vanish.
+struct ManifoldWalkStats {
+  uint64_t walks = 0;
+  uint64_t converged = 0;
+  uint64_t iterations = 0;  // Newton steps over all walks
+  uint64_t halvings = 0;    // projections refused and retried with half the step
+};
+
+// y: x with x_{a+1} .. x_{b-1} moved and x_b replaced by `target` (a surface vertex), the chain
+// ending within a tolerance of 1e-6 of the scene's size of it and the last segment unoccluded.
+// False when the walk does not converge (in at most 24 steps), the chain cannot be followed, or
+// the target is not reached from the chain's last vertex. residuals, when given, receives the
+// distance from the chain's end to the target before each step (and the last, converged, one).
+bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
+                  const PathVertex& target, Path* y, ManifoldWalkStats* stats = nullptr,
+                  std::vector<double>* residuals = nullptr);
+
+// The tolerance within which a walk's chain ends at its target.
+double manifoldWalkTolerance(const Scene& scene, const Vec3f& target);
+
+}  // namespace farm
