@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/mcmc/manifold_next_event.h"
 #include "common/mcmc/primary_sample_integrand.h"
 #include "common/mcmc/primary_sample_sampler.h"
 #include "common/transport/bidirectional.h"
@@ -17,8 +18,41 @@ constexpr uint64_t kCandidateDomain = 0xb007;
 constexpr uint64_t kResampleDomain = 0x5eed;
 }  // namespace
 
+namespace {
+
+// The paths of path-space MLT's candidate `index` and the luminance each carries: BDPT's
+// strategies, less those of the paths that manifold next-event estimation takes over, then that
+// estimator's own sample, from the same stream after BDPT's draws. The candidate's I is their
+// sum; its seed path is drawn from them by share.
+void visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
+                             const std::function<void(Path&&, double)>& visit) {
+  Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
+  IndependentSampler sampler(&rng);
+  BidirectionalTracer tracer(scene, maxDepth);
+  const ManifoldNextEvent manifold(scene, maxDepth);
+  const bool manifoldActive = manifold.active();
+  tracer.visitStrategies(primarySampleFilmPoint(scene.camera(), sampler), sampler,
+                         [&](const BidirectionalTracer::StrategyPath& sp) {
+                           const double share = luminance(sp.unweighted) * sp.weight;
+                           if (!(share > 0) || !std::isfinite(share)) return;
+                           Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+                           if (manifoldActive && manifold.covers(x)) return;
+                           if (!x.contribution(scene, maxDepth).carriesLight()) return;
+                           visit(std::move(x), share);
+                         });
+  manifold.sample(sampler, [&](const Path& x, double value) { visit(Path(x), value); });
+}
+
+}  // namespace
+
 double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
                          int64_t index, std::vector<float>* primarySamples) {
+  if (algorithm == Algorithm::MLT) {
+    double sum = 0;
+    visitPathSpaceCandidate(scene, maxDepth, seed, index,
+                            [&](Path&&, double share) { sum += share; });
+    return sum;
+  }
   thread_local std::vector<Splat> splats;
   Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
   RecordingSampler recorder(&rng);
@@ -31,23 +65,14 @@ double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, 
 
 bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t index, double u,
                    Path* path) {
-  // The draws of evaluateCandidate(): the same stream, read in the same order.
-  Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
-  IndependentSampler sampler(&rng);
-  BidirectionalTracer tracer(scene, maxDepth);
   std::vector<Path> paths;
   std::vector<double> shares;
   double total = 0;
-  tracer.visitStrategies(primarySampleFilmPoint(scene.camera(), sampler), sampler,
-                         [&](const BidirectionalTracer::StrategyPath& sp) {
-                           const double share = luminance(sp.unweighted) * sp.weight;
-                           if (!(share > 0) || !std::isfinite(share)) return;
-                           Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
-                           if (!x.contribution(scene, maxDepth).carriesLight()) return;
-                           paths.push_back(std::move(x));
-                           shares.push_back(share);
-                           total += share;
-                         });
+  visitPathSpaceCandidate(scene, maxDepth, seed, index, [&](Path&& x, double share) {
+    paths.push_back(std::move(x));
+    shares.push_back(share);
+    total += share;
+  });
   if (paths.empty()) return false;
   double target = u * total, run = 0;
   for (size_t i = 0; i < paths.size(); ++i) {

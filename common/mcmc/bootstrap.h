@@ -21,13 +21,17 @@ struct BootstrapCandidates {
 
 // I(u) for the candidate with index i of a job with `seed`: the algorithm's primary-sample
 // integrand (see primary_sample_integrand.h) evaluated on stream (seed, i). Returns the splats'
-// total luminance and, when asked, the primary-sample vector it used.
+// total luminance and, when asked, the primary-sample vector it used. For path-space MLT, the
+// luminance of the paths candidatePath() draws from: BDPT's, and where the scene has specular
+// surfaces, those of manifold next-event estimation in place of BDPT's of their kind
+// (manifold_next_event.h), which BDPT finds only through camera paths that hit the light.
 double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
                          int64_t index, std::vector<float>* primarySamples = nullptr);
 
-// Path-space seeds (mlt): candidate `index` rebuilt as the paths its BDPT sample's strategies
-// built, one chosen in proportion to the luminance it carries (u uniform in [0, 1)), among
-// those whose path carries light. Resampling candidates by I and then a strategy by its share
+// Path-space seeds (mlt): candidate `index` rebuilt as the paths its sample built (BDPT's
+// strategies and manifold next-event estimation's paths, as evaluateCandidate() sums them), one
+// chosen in proportion to the luminance it carries (u uniform in [0, 1)), among those whose path
+// carries light. Resampling candidates by I and then a strategy by its share
 // of I gives paths distributed as the luminance of f (Veach 1997, 11.3). False when none does.
 bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t index, double u,
                    Path* path);

@@ -146,6 +146,27 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
       lights_.push_back(light);
     }
   }
+  // Specular surfaces by area (a sphere as one entry).
+  double specularArea = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!bsdfs_[size_t(shapeBsdf_[i])].isDelta()) continue;
+    const ShapeDescription& s = desc_.shapes[size_t(i)];
+    if (s.type == ShapeDescription::Type::Sphere) {
+      specularArea += 4 * kPi * double(s.radius) * s.radius;
+      specularCdf_.push_back(specularArea);
+      specularPrimitives_.emplace_back(i, 0);
+      continue;
+    }
+    for (size_t t = 0; t < s.indices.size() / 3; ++t) {
+      const double a =
+          double(triangleArea(s.positions[s.indices[3 * t]], s.positions[s.indices[3 * t + 1]],
+                              s.positions[s.indices[3 * t + 2]]));
+      if (!(a > 0)) continue;
+      specularArea += a;
+      specularCdf_.push_back(specularArea);
+      specularPrimitives_.emplace_back(i, uint32_t(t));
+    }
+  }
   rtcCommitScene(scene);
   throwOnEmbreeError(device, "committing the scene");
   if (n > 0) extent_ = std::max(1e-6f, 0.5f * length(hi - lo));
@@ -300,6 +321,28 @@ bool Scene::surfaceDifferential(int shape, int primitive, const Vec3f& p, const 
     (k == 0 ? out->dndu : out->dndv) = dn;
   }
   return true;
+}
+
+bool Scene::sampleSpecularSurface(const float u[3], Vec3f* p, Vec3f* n) const {
+  if (specularCdf_.empty()) return false;
+  const double target = double(u[0]) * specularCdf_.back();
+  size_t k = size_t(std::upper_bound(specularCdf_.begin(), specularCdf_.end(), target) -
+                    specularCdf_.begin());
+  k = std::min(k, specularCdf_.size() - 1);
+  const auto [shape, t] = specularPrimitives_[k];
+  const ShapeDescription& s = desc_.shapes[size_t(shape)];
+  if (s.type == ShapeDescription::Type::Sphere) {
+    const Vec3f d = squareToUniformSphere({u[1], u[2]});
+    *p = s.center + d * s.radius;
+    *n = s.flipNormals ? -d : d;
+    return true;
+  }
+  const uint32_t* tri = &s.indices[3 * size_t(t)];
+  const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
+  const Vec2f bary = squareToTriangle({u[1], u[2]});
+  *p = a * bary.x + b * bary.y + c * (1 - bary.x - bary.y);
+  Vec3f ns;
+  return triangleNormals(s, t, bary.x, bary.y, 1 - bary.x - bary.y, n, &ns);
 }
 
 Vec3f Scene::sampleEmission(int light, Vec2f u) const {

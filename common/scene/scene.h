@@ -2,6 +2,7 @@
 // The renderer's scene: the description turned into Embree geometry, BSDFs, area lights and the
 // camera. Read-only after construction and shared by all threads of a process.
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "common/scene/bsdf.h"
@@ -91,6 +92,12 @@ class Scene {
   bool surfaceDifferential(int shape, int primitive, const Vec3f& p, const Vec3f& ng,
                            SurfaceDifferential* out) const;
 
+  // Points of the specular shapes (those whose BSDF has only Dirac lobes), uniformly by area
+  // over all of them: where manifold next-event estimation seeds its search for a specular
+  // vertex. False when the scene has no specular surface.
+  bool hasSpecularSurfaces() const { return !specularCdf_.empty(); }
+  bool sampleSpecularSurface(const float u[3], Vec3f* p, Vec3f* n) const;
+
   // The shape's BSDF as its description gives it: what does not depend on textures (its type,
   // its Dirac lobes) may be read here.
   const Bsdf& bsdfOf(int shape) const { return bsdfs_[shapeBsdf_[shape]]; }
@@ -149,6 +156,9 @@ class Scene {
   std::vector<Bsdf> bsdfs_;
   std::vector<int> shapeBsdf_, shapeLight_;
   std::vector<std::vector<double>> triangleCdf_;  // per emitting mesh shape: area CDF
+  // Specular surfaces by area: the running total up to each (shape, triangle) entry.
+  std::vector<double> specularCdf_;
+  std::vector<std::pair<int, uint32_t>> specularPrimitives_;
   std::vector<AreaLight> lights_;
   std::vector<double> lightCdf_;
   float extent_ = 1;

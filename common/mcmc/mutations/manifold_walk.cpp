@@ -12,6 +12,8 @@ namespace {
 
 constexpr int kMaxSteps = 24;
 constexpr double kSmallestStep = 1.0 / 1024;
+// Projections (each a ray per chain vertex) a walk may spend: a walk that needs more is lost.
+constexpr int kMaxProjections = 64;
 
 // x_{a+1} .. x_b of `trial` traced from trial[a] in direction w through x's lobes, on x's shapes
 // for the specular vertices.
@@ -39,6 +41,7 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
   const double tolerance = manifoldWalkTolerance(scene, target.p);
   Path current = x;
   double beta = 1;
+  int projections = 0;
   for (int step = 0;; ++step) {
     const Vec3f r = target.p - current[b].p;
     const double distance = double(length(r));
@@ -61,6 +64,7 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
     while (!moved) {
       const Vec3f q =
           current[a + 1].p + first.dpdu * float(beta * su) + first.dpdv * float(beta * sv);
+      if (++projections > kMaxProjections) return false;
       Path trial = current;
       // Aimed from where the ray leaves x_a (a little off its surface), so that it meets x_{a+1}'s
       // surface at q itself: aimed from x_a, it would land a little beside q, the same little

@@ -23,9 +23,10 @@ struct ManifoldWalkStats {
 
 // y: x with x_{a+1} .. x_{b-1} moved and x_b replaced by `target` (a surface vertex), the chain
 // ending within a tolerance of 1e-6 of the scene's size of it and the last segment unoccluded.
-// False when the walk does not converge (in at most 24 steps), the chain cannot be followed, or
-// the target is not reached from the chain's last vertex. residuals, when given, receives the
-// distance from the chain's end to the target before each step (and the last, converged, one).
+// False when the walk does not converge (in at most 24 steps and 64 projections), the chain
+// cannot be followed, or the target is not reached from the chain's last vertex. residuals, when
+// given, receives the distance from the chain's end to the target before each step (and the
+// last, converged, one).
 bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
                   const PathVertex& target, Path* y, ManifoldWalkStats* stats = nullptr,
                   std::vector<double>* residuals = nullptr);

@@ -1,0 +1,215 @@
+#include "common/mcmc/manifold_next_event.h"
+
+#include <cmath>
+#include <vector>
+
+#include "common/mcmc/mutations/manifold_walk.h"
+#include "common/mcmc/primary_sample_integrand.h"
+#include "common/scene/scene.h"
+#include "common/transport/specular_manifold.h"
+
+namespace farm {
+
+namespace {
+
+constexpr int kUnboundedLength = 10;
+constexpr int kMaxSpecularVertices = 2;
+constexpr uint64_t kMaxTrials = 10000;
+// Seeds near the crossing of the segment from z to y with a specular surface, this often; the
+// rest anywhere on the specular surfaces, which reaches every chain there is.
+constexpr float kLocalShare = 0.9f;
+
+// Whether two chains are the same solution: as many specular vertices, on the same shapes, each
+// within a thousandth of the chain's shortest edge of the other's (walks converge to a millionth
+// of the scene; distinct solutions lie apart).
+bool sameSolution(const Path& a, const Path& b) {
+  if (a.vertices.size() != b.vertices.size()) return false;
+  double edge = INFINITY;
+  for (int i = 0; i < a.length(); ++i) edge = std::min(edge, double(length(a[i + 1].p - a[i].p)));
+  for (int i = 1; i < a.length(); ++i) {
+    if (a[i].shape != b[i].shape || !(double(length(a[i].p - b[i].p)) <= 1e-3 * edge)) return false;
+  }
+  return true;
+}
+
+// The probability with which a chain traced from a seed reflects at specular vertex v, arriving
+// from `from`: the Fresnel reflectance, kept within [0.1, 0.9] so that neither lobe is starved,
+// except where only one exists (a conductor; total internal reflection).
+float reflectionProbability(const Scene& scene, const PathVertex& v, const Vec3f& from) {
+  const BsdfDescription& desc = scene.bsdfOf(v.shape).description();
+  if (desc.type != BsdfDescription::Type::Dielectric) return 1;
+  float cosT;
+  const float f =
+      fresnelDielectric(dot(normalize(from - v.p), v.ns), desc.intIOR / desc.extIOR, &cosT);
+  return f >= 1 ? 1.0f : std::min(0.9f, std::max(0.1f, f));
+}
+
+}  // namespace
+
+ManifoldNextEvent::ManifoldNextEvent(const Scene& scene, int maxDepth)
+    : scene_(scene),
+      maxDepth_(maxDepth),
+      maxLength_(maxDepth > 0 ? maxDepth : kUnboundedLength),
+      context_{scene, maxDepth} {}
+
+bool ManifoldNextEvent::active() const {
+  return scene_.hasSpecularSurfaces() && !scene_.lights().empty() && maxLength_ >= 3;
+}
+
+bool ManifoldNextEvent::covers(const Path& x) const {
+  const int k = x.length();
+  if (k < 3 || k > maxLength_) return false;
+  // x_0 on a light: a light vertex, or a camera path's hit on an emitting surface.
+  const PathVertex& light = x[0];
+  if (light.light < 0 || atInfinity(light)) return false;
+  int j = 0;  // specular vertices after the light
+  while (j + 1 < k && x.isSpecular(scene_, j + 1)) ++j;
+  if (j < 1 || j > kMaxSpecularVertices || x[j + 1].kind != PathVertex::Kind::Surface ||
+      x.isSpecular(scene_, j + 1))
+    return false;
+  // Through one specular vertex, always; through more, only where the diffuse vertex is seen
+  // through a specular one too (L S S D S ..), which BDPT builds only by hitting the light: where
+  // it is seen from a diffuse vertex or the camera, BDPT's light subpaths join it well, while
+  // the trials of a chain of several vertices (its solutions' basins small, near a caustic)
+  // make this estimator noisy.
+  return j == 1 || x.isSpecular(scene_, j + 2);
+}
+
+bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool severalAllowed,
+                              bool crossing, const Vec3f& crossingPoint,
+                              const Vec3f& crossingNormal, double sigma, Sampler& sampler,
+                              Path* chain) const {
+  // The seed: a point near the crossing (a Gaussian offset in its tangent plane) or anywhere on
+  // the specular surfaces; four numbers either way.
+  const float choice = sampler.next(kLightStream);
+  float u[3] = {sampler.next(kLightStream), sampler.next(kLightStream), sampler.next(kLightStream)};
+  Vec3f seed;
+  if (crossing && choice < kLocalShare) {
+    const double radius = sigma * std::sqrt(-2 * std::log(std::max(1e-12, 1.0 - double(u[0]))));
+    const double phi = 2 * M_PI * double(u[1]);
+    const Frame frame(crossingNormal);
+    seed = crossingPoint + frame.s * float(radius * std::cos(phi)) +
+           frame.t * float(radius * std::sin(phi));
+  } else {
+    Vec3f n;
+    if (!scene_.sampleSpecularSurface(u, &seed, &n)) return false;
+  }
+  // From y through the seed to the first surface, which must be specular; then through a lobe
+  // picked at random (by its Fresnel share) at each specular vertex it meets, up to the first
+  // non-specular one, where the chain ends: its structure is part of what the seed draws. The
+  // walk takes that end to z.
+  const Vec3f origin = scene_.spawnRay(y.p, y.n, seed - y.p).o;
+  Vec3f w = normalize(seed - origin);
+  if (!isFinite(w)) return false;
+  Path initial;
+  initial.vertices.reserve(kMaxSpecularVertices + 2);
+  initial.vertices.push_back(y);
+  for (;;) {
+    PathVertex next;
+    if (!traceVertex(context_, initial.vertices.back(), w, &next)) return false;
+    initial.vertices.push_back(next);
+    const int i = initial.length();
+    if (!initial.isSpecular(scene_, i)) break;
+    if (i > kMaxSpecularVertices) return false;
+    const PathVertex& s = initial[i];
+    const bool reflection =
+        sampler.next(kLightStream) < reflectionProbability(scene_, s, initial[i - 1].p);
+    if (!specularBounce(scene_, s, initial[i - 1].p, reflection, &w)) return false;
+  }
+  if (initial.length() < 2) return false;
+  // A chain of several vertices that covers() would give back to BDPT: no walk for it.
+  if (initial.length() > 2 && !severalAllowed) return false;
+  return manifoldWalk(context_, initial, 0, initial.length(), z, chain);
+}
+
+void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, Sampler& sampler,
+                                const std::function<void(const Path&, double)>& visit) const {
+  const PathVertex& z = cameraPath.back();
+  float pickPdf;
+  const int light = scene_.pickLight(sampler.next(kLightStream), &pickPdf);
+  float u[3] = {sampler.next(kLightStream), sampler.next(kLightStream), sampler.next(kLightStream)};
+  if (light < 0 || scene_.lights()[size_t(light)].isEnvironment()) return;
+  PathVertex y;
+  y.kind = PathVertex::Kind::Light;
+  y.light = light;
+  if (scene_.lights()[size_t(light)].isPoint()) {
+    y.p = scene_.pointLight(light).position();
+  } else {
+    scene_.sampleLightPoint(light, u, &y.p, &y.n);
+    y.ns = y.n;
+    y.shape = scene_.lights()[size_t(light)].shape;
+  }
+  // Where the segment from z to y first meets a specular surface: the local seeds' centre.
+  SurfaceHit hit;
+  Ray ray = scene_.spawnRay(z.p, z.n, y.p - z.p);
+  ray.tMax = length(y.p - ray.o);
+  ++context_.rays;
+  const bool crossing = scene_.intersect(ray, &hit) && scene_.bsdfOf(hit.shape).isDelta();
+  const double sigma = 0.1 * double(length(y.p - z.p));
+  // Chains of several specular vertices only towards a z seen through a specular vertex.
+  const bool several =
+      cameraPath.size() >= 3 && scene_.bsdfOf(cameraPath[cameraPath.size() - 2].shape).isDelta();
+  Path chain;
+  if (!solve(y, z, several, crossing, hit.p, hit.ng, sigma, sampler, &chain)) return;
+  // y, the specular vertices, then z .. E: a path of this estimator's kind that carries light,
+  // or nothing (and no trials spent on it).
+  const int end = chain.length();
+  Path x;
+  x.vertices.assign(chain.vertices.begin(), chain.vertices.end() - 1);
+  for (auto it = cameraPath.rbegin(); it != cameraPath.rend(); ++it) x.vertices.push_back(*it);
+  if (!covers(x)) return;  // BDPT's (longer than allowed, or a chain it joins well)
+  const PathContribution f = x.contribution(scene_, maxDepth_);
+  if (!f.carriesLight()) return;
+  // Trials until the same chain recurs: their count K has mean 1 / P(this chain).
+  uint64_t trials = 0;
+  for (;;) {
+    if (++trials > kMaxTrials) {
+      ++abandoned_;
+      return;
+    }
+    Path again;
+    if (solve(y, z, several, crossing, hit.p, hit.ng, sigma, sampler, &again) &&
+        sameSolution(chain, again))
+      break;
+  }
+  const int n = int(x.vertices.size());
+  std::vector<double> pL(static_cast<size_t>(n)), pE(static_cast<size_t>(n));
+  std::vector<char> delta(static_cast<size_t>(n));
+  x.densities(scene_, pL.data(), pE.data(), delta.data());
+  double logValue = f.logLuminance - std::log(pL[0]) -
+                    logSpecularChainMeasureRatio(scene_, x, 0, end) + std::log(double(trials));
+  for (int i = end; i < n - 1; ++i) logValue -= std::log(pE[size_t(i)]);
+  const double value = std::exp(logValue);
+  if (std::isfinite(value) && value > 0) visit(x, value);
+}
+
+void ManifoldNextEvent::sample(Sampler& sampler,
+                               const std::function<void(const Path&, double)>& visit) const {
+  if (!active()) return;
+  const Camera& camera = scene_.camera();
+  std::vector<PathVertex> cameraPath(1);
+  cameraPath[0].kind = PathVertex::Kind::Camera;
+  cameraPath[0].p = camera.position();
+  Vec3f w = camera.generateRay(primarySampleFilmPoint(camera, sampler)).d;
+  // z at `depth` edges from the camera makes a path of depth + 2 edges.
+  for (int depth = 1; depth + 2 <= maxLength_; ++depth) {
+    PathVertex z;
+    if (!traceVertex(context_, cameraPath.back(), w, &z)) return;
+    const Vec3f wo = normalize(cameraPath.back().p - z.p);
+    cameraPath.push_back(z);
+    const Bsdf bsdf = scene_.bsdfAt(z.shape, z.uv);
+    if (!bsdf.isDelta()) connect(cameraPath, sampler, visit);
+    if (depth + 3 > maxLength_) return;
+    const Frame frame(z.ns);
+    const float u[3] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
+                        sampler.next(kCameraStream)};
+    BsdfSample b;
+    if (!sidesAgree(wo, z.n, z.ns) ||
+        !bsdf.sample(frame.toLocal(wo), u, TransportMode::Radiance, &b))
+      return;
+    w = normalize(frame.toWorld(b.wi));
+    if (!sidesAgree(w, z.n, z.ns)) return;
+  }
+}
+
+}  // namespace farm

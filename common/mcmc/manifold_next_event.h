@@ -1,0 +1,69 @@
+#pragma once
+// Manifold next-event estimation (Hanika, Droske and Fascione 2015) made unbiased by specular
+// manifold sampling's weight (Zeltner, Georgiev and Jakob 2020), for the bootstrap of
+// path-space MLT: what reaches a diffuse surface from a light through specular interfaces
+// (L S+ D ..., the floor under water lit through its surface, the water's caustics) is a set of
+// measure zero for BDPT's connections and needs its camera paths to hit the light, which a small
+// light makes rare: BDPT's candidates then miss that light, and so do Z and the seeds.
+//
+// One sample traces a camera subpath (a uniform film point, then BSDF sampling, no Russian
+// roulette) and at each non-specular vertex z picks a light point y; a seed point on a specular
+// surface (near where the segment from z to y crosses one, or anywhere on them), a ray from y
+// through it, specular bounces (each lobe drawn by its Fresnel share) until the ray meets a
+// non-specular surface, and a manifold walk (manifold_walk.h) of that end to z give a specular
+// chain joining them: a path y S+ z .. E. The walk is deterministic, but which of the chains
+// joining y and z it finds depends on the seed, with some probability P; the number of further
+// seeds drawn until the same chain is found again is geometric with mean 1 / P, an unbiased
+// estimate of it. So the path's value f / p is
+//   f(x) / (ratio(x) p_light(y) p_camera(z .. E)) * K,
+// with ratio the specular chain's measure ratio (specular_manifold.h: Path's delta convention
+// against the chain integrated out) and K the count of trials.
+//
+// The paths it estimates (covers()) are those whose x_1 .. x_j are specular and x_{j+1} a
+// non-specular surface, from a light at a finite point: with j = 1 all of them, with j = 2 those
+// whose x_{j+2} is specular too (seen through glass or water, which BDPT reaches only by hitting
+// the light). BDPT's strategies that build such a path are left out of the bootstrap, so that
+// the two estimate every path once between them.
+#include <cstdint>
+#include <functional>
+
+#include "common/mcmc/mutations/mutation.h"
+#include "common/transport/sampler.h"
+
+namespace farm {
+
+class ManifoldNextEvent {
+ public:
+  ManifoldNextEvent(const Scene& scene, int maxDepth);
+
+  // Whether the scene has a specular surface at all: without one nothing is left to it.
+  bool active() const;
+  // Whether x is a path it estimates (and BDPT then does not).
+  bool covers(const Path& x) const;
+  // The longest path it builds, in edges: maxDepth, or 10 where the depth is unbounded (longer
+  // paths of its kind stay with BDPT).
+  int maxLength() const { return maxLength_; }
+
+  // One sample; `visit` receives each path built and the luminance of its value.
+  void sample(Sampler& sampler, const std::function<void(const Path&, double)>& visit) const;
+
+  uint64_t rays() const { return context_.rays; }
+  // Connections given up because the trials ran past their cap (10^4): each a path of
+  // probability below 1e-4 of being found, left out (a bias of that order on its share).
+  uint64_t abandoned() const { return abandoned_; }
+
+ private:
+  // y joined to z through specular vertices from a seed: the walked chain y S+ z, or false.
+  bool solve(const PathVertex& y, const PathVertex& z, bool severalAllowed, bool crossing,
+             const Vec3f& crossingPoint, const Vec3f& crossingNormal, double sigma,
+             Sampler& sampler, Path* chain) const;
+  void connect(const std::vector<PathVertex>& cameraPath, Sampler& sampler,
+               const std::function<void(const Path&, double)>& visit) const;
+
+  const Scene& scene_;
+  int maxDepth_, maxLength_;
+  MutationContext context_;
+  mutable uint64_t abandoned_ = 0;
+};
+
+}  // namespace farm

@@ -1,0 +1,140 @@
+// Manifold next-event estimation against answers it does not compute:
+//  - in the pool lit by a point light (pool_scene.h), where every path the camera receives is
+//    L S D S E and BDPT builds none of them, path-space MLT's bootstrap estimates Z as the
+//    image's integral from the closed-form optics, and its seeds are such paths;
+//  - around the glass ball (area light, where BDPT converges on every kind of path), the paths
+//    it takes over from BDPT (x_1 specular, x_2 diffuse: the ball's reflections of the light on
+//    the floor) carry what BDPT's strategies for them carry, and Z is BDPT's.
+// Bounds: 4.4 standard errors.
+#include "common/mcmc/manifold_next_event.h"
+
+#include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "common/mcmc/bootstrap.h"
+#include "common/mcmc/primary_sample_integrand.h"
+#include "common/render/render_job.h"
+#include "common/scene/pool_scene.h"
+#include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
+#include "common/transport/bidirectional.h"
+
+namespace farm {
+namespace {
+
+constexpr double kZ = 4.4;
+
+struct Estimate {
+  double mean = 0, stdError = 0;
+};
+
+Estimate meanOf(const std::vector<double>& values) {
+  double s = 0, s2 = 0;
+  for (double v : values) s += v, s2 += v * v;
+  const double n = double(values.size());
+  Estimate e;
+  e.mean = s / n;
+  e.stdError = std::sqrt(std::max(0.0, s2 / n - e.mean * e.mean) / n);
+  return e;
+}
+
+TEST(ManifoldNextEvent, BootstrapFindsWhatBdptCannotInThePool) {
+  Scene scene(pool::scene());
+  const int maxDepth = 4;
+  const double exact = pool::filmIntegral(scene.camera());
+  const int64_t count = 1 << 16;
+  // BDPT alone: nothing (a point light seen through water).
+  BidirectionalTracer tracer(scene, maxDepth);
+  Rng rng(3, 3);
+  IndependentSampler sampler(&rng);
+  int carrying = 0;
+  for (int i = 0; i < 4096; ++i) {
+    tracer.visitStrategies(primarySampleFilmPoint(scene.camera(), sampler), sampler,
+                           [&](const BidirectionalTracer::StrategyPath&) { ++carrying; });
+  }
+  EXPECT_EQ(carrying, 0);
+  const BootstrapCandidates mlt = generateCandidates(scene, Algorithm::MLT, maxDepth, 3, count);
+  std::printf("pool: Z %.6g +- %.2g, closed form %.6g; %lld of %lld candidates carry light\n",
+              mlt.mean, mlt.stdError, exact, (long long)mlt.nonZero, (long long)count);
+  EXPECT_NEAR(mlt.mean, exact, kZ * mlt.stdError);
+  EXPECT_LT(mlt.stdError, 0.01 * exact);
+  // The seeds are such paths, and carry light.
+  const std::vector<int64_t> picks = resampleSeeds(mlt.contributions, 8, 5);
+  for (int64_t i : picks) {
+    Path x;
+    ASSERT_TRUE(candidatePath(scene, maxDepth, 3, i, 0.5, &x));
+    EXPECT_EQ(x.length(), 4);
+    EXPECT_TRUE(x.isSpecular(scene, 1) && x.isSpecular(scene, 3));
+    EXPECT_TRUE(x.contribution(scene, maxDepth).carriesLight());
+  }
+}
+
+// What BDPT's strategies carry on the paths manifold next-event estimation covers, against
+// what it carries there itself, sample by sample; and Z with it in place of those strategies.
+void expectTakesOverWhatBdptCarries(const Scene& scene, int maxDepth, int samples,
+                                    double resolution, const char* name) {
+  const ManifoldNextEvent manifold(scene, maxDepth);
+  ASSERT_TRUE(manifold.active());
+  std::vector<double> bdptCovered(samples), manifoldCovered(samples), bdptAll(samples);
+  tbb::parallel_for(0, samples, [&](int i) {
+    Rng rng(13, uint64_t(i));
+    IndependentSampler sampler(&rng);
+    BidirectionalTracer tracer(scene, maxDepth);
+    const ManifoldNextEvent local(scene, maxDepth);
+    tracer.visitStrategies(primarySampleFilmPoint(scene.camera(), sampler), sampler,
+                           [&](const BidirectionalTracer::StrategyPath& sp) {
+                             const double share = luminance(sp.unweighted) * sp.weight;
+                             if (!(share > 0)) return;
+                             bdptAll[i] += share;
+                             Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+                             if (local.covers(x)) bdptCovered[i] += share;
+                           });
+    local.sample(sampler, [&](const Path& x, double value) {
+      EXPECT_TRUE(local.covers(x));
+      manifoldCovered[i] += value;
+    });
+  });
+  const Estimate b = meanOf(bdptCovered), m = meanOf(manifoldCovered), all = meanOf(bdptAll);
+  std::printf(
+      "%s: covered paths, BDPT %.5g +- %.2g, manifold next event %.5g +- %.2g (of "
+      "BDPT's %.5g)\n",
+      name, b.mean, b.stdError, m.mean, m.stdError, all.mean);
+  ASSERT_GT(b.mean, 0) << name;
+  EXPECT_NEAR(m.mean, b.mean, kZ * std::hypot(b.stdError, m.stdError)) << name;
+  EXPECT_LT(std::hypot(b.stdError, m.stdError), resolution * b.mean)
+      << name << ": too noisy to tell";
+  const BootstrapCandidates mlt = generateCandidates(scene, Algorithm::MLT, maxDepth, 21, samples);
+  EXPECT_NEAR(mlt.mean, all.mean, kZ * std::hypot(mlt.stdError, all.stdError)) << name;
+}
+
+// The ball's reflections of the light on the floor (a curved mirror's L S D) and its caustic
+// seen through it (L S S D S S E), one percent of the image: BDPT's own estimate of them is
+// noisy, so this resolves differences of a quarter (a combined standard error below 7%).
+TEST(ManifoldNextEvent, TakesOverWhatBdptCarriesAroundTheGlassBall) {
+  RenderSettings settings;
+  settings.width = settings.height = 24;
+  auto scene = loadScene(glassBallScene(), settings);
+  expectTakesOverWhatBdptCarries(*scene, scene->maxDepth() == 0 ? -1 : scene->maxDepth(), 1 << 20,
+                                 0.07, "glass ball");
+}
+
+// The pool lit by a square light half a unit wide instead of the point, which BDPT's camera
+// paths hit through the water often enough: all of the image is L S D S E.
+TEST(ManifoldNextEvent, TakesOverWhatBdptCarriesInAPoolUnderAnAreaLight) {
+  SceneDescription d = pool::scene();
+  d.pointLights.clear();
+  ShapeDescription light =
+      quadShape(pool::kLight + Vec3f(-0.25f, 0, -0.25f), Vec3f(0.5f, 0, 0), Vec3f(0, 0, 0.5f), 0);
+  light.isEmitter = true;
+  light.radiance = Spectrum(20.0f);
+  d.shapes.push_back(light);
+  Scene scene(d);
+  expectTakesOverWhatBdptCarries(scene, 4, 1 << 18, 0.03, "pool under an area light");
+}
+
+}  // namespace
+}  // namespace farm
