@@ -49,13 +49,16 @@ struct MutationMix {
   double lensPerturbation = 0.2;
   double causticPerturbation = 0.15;
   double multiChainPerturbation = 0.15;
-  double manifoldPerturbation = 0;
+  // Applies only to paths whose first non-specular vertex from the camera is lit through a
+  // specular chain (L S+ D S* E): on the water caustic it is what moves the chains that the
+  // bootstrap seeds there (manifold_perturbation.h).
+  double manifoldPerturbation = 0.2;
 
   bool operator==(const MutationMix& o) const;
 };
 
-// "bidir=0.4,lens-subpath=0.1,lens=0.2,caustic=0.15,multichain=0.15"; names left out keep
-// their defaults. False with *error naming the problem.
+// "bidir=0.4,lens-subpath=0.1,lens=0.2,caustic=0.15,multichain=0.15,manifold=0.2"; names left out
+// keep their defaults. False with *error naming the problem.
 bool parseMutationMix(const std::string& text, MutationMix* out, std::string* error);
 std::string formatMutationMix(const MutationMix& mix);
 // Empty when usable: finite, non-negative, bidirectional > 0.
