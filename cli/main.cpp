@@ -49,6 +49,7 @@ struct RenderOptions {
   std::string mutationMix;
   double erptChains = farm::RenderSettings().erptChains;
   int erptLength = farm::RenderSettings().erptLength;
+  int chains = 64;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -83,6 +84,12 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       ->default_str("1");
   command->add_option("--erpt-length", o->erptLength, "erpt: mutations per chain")
       ->default_str("100");
+  command
+      ->add_option("--chains", o->chains,
+                   "independent Markov chains (pssmlt, pssmlt-pt, mmlt, mlt), each seeded by the "
+                   "bootstrap, or work units (pt, bdpt): more chains cover the image more evenly "
+                   "where chains hardly leave the kind of path they start on")
+      ->default_str("64");
   o->timeOption = command->add_option(
       "--time", o->time,
       "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
@@ -139,6 +146,11 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
   s->largeStepProbability = o.largeStep;
   s->erptChains = o.erptChains;
   s->erptLength = o.erptLength;
+  if (o.chains < 1 || o.chains > (1 << 20)) {
+    *error = "--chains must be between 1 and 1048576, not " + std::to_string(o.chains);
+    return false;
+  }
+  s->numChains = o.chains;
   if (!farm::parseMutationMix(o.mutationMix, &s->mutationMix, error)) {
     *error = "--mutation-mix: " + *error;
     return false;
