@@ -122,8 +122,7 @@ bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool sev
   return manifoldWalk(context_, initial, 0, initial.length(), z, chain);
 }
 
-void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, double weight,
-                                Sampler& sampler,
+void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, Sampler& sampler,
                                 const std::function<void(const Path&, double)>& visit) const {
   const PathVertex& z = cameraPath.back();
   float pickPdf;
@@ -180,7 +179,7 @@ void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, doubl
   double logValue = f.logLuminance - std::log(pL[0]) -
                     logSpecularChainMeasureRatio(scene_, x, 0, end) + std::log(double(trials));
   for (int i = end; i < n - 1; ++i) logValue -= std::log(pE[size_t(i)]);
-  const double value = weight * std::exp(logValue);
+  const double value = std::exp(logValue);
   if (std::isfinite(value) && value > 0) visit(x, value);
 }
 
@@ -192,7 +191,6 @@ void ManifoldNextEvent::sample(Sampler& sampler,
   cameraPath[0].kind = PathVertex::Kind::Camera;
   cameraPath[0].p = camera.position();
   Vec3f w = camera.generateRay(primarySampleFilmPoint(camera, sampler)).d;
-  int diffuseVertices = 0;
   // z at `depth` edges from the camera makes a path of depth + 2 edges.
   for (int depth = 1; depth + 2 <= maxLength_; ++depth) {
     PathVertex z;
@@ -200,14 +198,7 @@ void ManifoldNextEvent::sample(Sampler& sampler,
     const Vec3f wo = normalize(cameraPath.back().p - z.p);
     cameraPath.push_back(z);
     const Bsdf bsdf = scene_.bsdfAt(z.shape, z.uv);
-    if (!bsdf.isDelta()) {
-      // The n-th non-specular vertex joins the light with probability 1 / n, its value times n
-      // (roulette, unbiased): deeper vertices carry less, and the walks and trials are this
-      // estimator's cost.
-      ++diffuseVertices;
-      if (sampler.next(kCameraStream) * float(diffuseVertices) < 1.0f)
-        connect(cameraPath, double(diffuseVertices), sampler, visit);
-    }
+    if (!bsdf.isDelta()) connect(cameraPath, sampler, visit);
     if (depth + 3 > maxLength_) return;
     const Frame frame(z.ns);
     const float u[3] = {sampler.next(kCameraStream), sampler.next(kCameraStream),

@@ -7,8 +7,7 @@
 // light makes rare: BDPT's candidates then miss that light, and so do Z and the seeds.
 //
 // One sample traces a camera subpath (a uniform film point, then BSDF sampling, no Russian
-// roulette) and at its n-th non-specular vertex z, with probability 1 / n (and n times the value),
-// picks a light point y; a seed point on a specular
+// roulette) and at each non-specular vertex z picks a light point y; a seed point on a specular
 // surface (near where the segment from z to y crosses one, or anywhere on them), a ray from y
 // through it, specular bounces (each lobe drawn by its Fresnel share) until the ray meets a
 // non-specular surface, and a manifold walk (manifold_walk.h) of that end to z give a specular
@@ -58,9 +57,7 @@ class ManifoldNextEvent {
   bool solve(const PathVertex& y, const PathVertex& z, bool severalAllowed, bool crossing,
              const Vec3f& crossingPoint, const Vec3f& crossingNormal, double sigma,
              Sampler& sampler, Path* chain) const;
-  // Joins the camera subpath's last vertex to a light; `weight` multiplies the value (the inverse
-  // of the probability of having tried).
-  void connect(const std::vector<PathVertex>& cameraPath, double weight, Sampler& sampler,
+  void connect(const std::vector<PathVertex>& cameraPath, Sampler& sampler,
                const std::function<void(const Path&, double)>& visit) const;
 
   const Scene& scene_;
