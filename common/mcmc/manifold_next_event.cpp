@@ -1,5 +1,6 @@
 #include "common/mcmc/manifold_next_event.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -18,19 +19,6 @@ constexpr uint64_t kMaxTrials = 10000;
 // Seeds near the crossing of the segment from z to y with a specular surface, this often; the
 // rest anywhere on the specular surfaces, which reaches every chain there is.
 constexpr float kLocalShare = 0.9f;
-
-// Whether two chains are the same solution: as many specular vertices, on the same shapes, each
-// within a thousandth of the chain's shortest edge of the other's (walks converge to a millionth
-// of the scene; distinct solutions lie apart).
-bool sameSolution(const Path& a, const Path& b) {
-  if (a.vertices.size() != b.vertices.size()) return false;
-  double edge = INFINITY;
-  for (int i = 0; i < a.length(); ++i) edge = std::min(edge, double(length(a[i + 1].p - a[i].p)));
-  for (int i = 1; i < a.length(); ++i) {
-    if (a[i].shape != b[i].shape || !(double(length(a[i].p - b[i].p)) <= 1e-3 * edge)) return false;
-  }
-  return true;
-}
 
 // The probability with which a chain traced from a seed reflects at specular vertex v, arriving
 // from `from`: the Fresnel reflectance, kept within [0.1, 0.9] so that neither lobe is starved,
@@ -98,8 +86,7 @@ bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool sev
   // picked at random (by its Fresnel share) at each specular vertex it meets, up to the first
   // non-specular one, where the chain ends: its structure is part of what the seed draws. The
   // walk takes that end to z.
-  const Vec3f origin = scene_.spawnRay(y.p, y.n, seed - y.p).o;
-  Vec3f w = normalize(seed - origin);
+  Vec3f w = aimedDirection(scene_, y, seed);
   if (!isFinite(w)) return false;
   Path initial;
   initial.vertices.reserve(kMaxSpecularVertices + 2);
@@ -125,20 +112,11 @@ bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool sev
 void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, Sampler& sampler,
                                 const std::function<void(const Path&, double)>& visit) const {
   const PathVertex& z = cameraPath.back();
-  float pickPdf;
-  const int light = scene_.pickLight(sampler.next(kLightStream), &pickPdf);
-  float u[3] = {sampler.next(kLightStream), sampler.next(kLightStream), sampler.next(kLightStream)};
-  if (light < 0 || scene_.lights()[size_t(light)].isEnvironment()) return;
+  const float uPick = sampler.next(kLightStream);
+  const float u[3] = {sampler.next(kLightStream), sampler.next(kLightStream),
+                      sampler.next(kLightStream)};
   PathVertex y;
-  y.kind = PathVertex::Kind::Light;
-  y.light = light;
-  if (scene_.lights()[size_t(light)].isPoint()) {
-    y.p = scene_.pointLight(light).position();
-  } else {
-    scene_.sampleLightPoint(light, u, &y.p, &y.n);
-    y.ns = y.n;
-    y.shape = scene_.lights()[size_t(light)].shape;
-  }
+  if (!sampleLightVertex(scene_, uPick, u, &y)) return;
   // Where the segment from z to y first meets a specular surface: the local seeds' centre.
   SurfaceHit hit;
   Ray ray = scene_.spawnRay(z.p, z.n, y.p - z.p);
@@ -169,7 +147,8 @@ void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, Sampl
     }
     Path again;
     if (solve(y, z, several, crossing, hit.p, hit.ng, sigma, sampler, &again) &&
-        sameSolution(chain, again))
+        again.vertices.size() == chain.vertices.size() &&
+        sameSpecularChain(chain, again, 0, chain.length()))
       break;
   }
   const int n = int(x.vertices.size());

@@ -99,9 +99,11 @@ void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* f
     }
     const Mutation& mutation = *mutations_[chosen];
     MutationRecord record;
-    const ManifoldWalkStats walksBefore = manifold_.walkStats();
+    const bool tallyWalks = flusher && &mutation == &manifold_;
+    ManifoldWalkStats walksBefore;
+    if (tallyWalks) walksBefore = manifold_.walkStats();
     const bool proposed = mutation.propose(x_, rng, &y_, &record);
-    if (flusher && &mutation == &manifold_) {
+    if (tallyWalks) {
       // The walks it ran (forward, and back to check the move reversible), and which converged.
       const ManifoldWalkStats& after = manifold_.walkStats();
       const uint64_t converged = after.converged - walksBefore.converged;

@@ -306,6 +306,7 @@ void expectStationary(const Scene& scene, const ResampledTarget& target, const S
         }
       }
       for (const MutationTally& t : f.tallies) {
+        if (t.name != mutationName(type)) continue;  // not the manifold walks' own tally
         proposed[c] += t.proposed;
         accepted[c] += t.accepted;
       }

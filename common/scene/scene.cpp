@@ -51,6 +51,23 @@ bool triangleNormals(const ShapeDescription& s, uint32_t prim, float w0, float w
   return true;
 }
 
+// A point of primitive t of shape s (a whole sphere, or triangle t of a mesh), uniform by area
+// from u, and its normal (the emitting side's, for lights). False for a degenerate triangle.
+bool pointOnPrimitive(const ShapeDescription& s, uint32_t t, const Vec2f& u, Vec3f* p, Vec3f* n) {
+  if (s.type == ShapeDescription::Type::Sphere) {
+    const Vec3f d = squareToUniformSphere(u);
+    *p = s.center + d * s.radius;
+    *n = s.flipNormals ? -d : d;
+    return true;
+  }
+  const uint32_t* tri = &s.indices[3 * size_t(t)];
+  const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
+  const Vec2f bary = squareToTriangle(u);
+  *p = a * bary.x + b * bary.y + c * (1 - bary.x - bary.y);
+  Vec3f ns;
+  return triangleNormals(s, t, bary.x, bary.y, 1 - bary.x - bary.y, n, &ns);
+}
+
 }  // namespace
 
 Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
@@ -330,19 +347,7 @@ bool Scene::sampleSpecularSurface(const float u[3], Vec3f* p, Vec3f* n) const {
                     specularCdf_.begin());
   k = std::min(k, specularCdf_.size() - 1);
   const auto [shape, t] = specularPrimitives_[k];
-  const ShapeDescription& s = desc_.shapes[size_t(shape)];
-  if (s.type == ShapeDescription::Type::Sphere) {
-    const Vec3f d = squareToUniformSphere({u[1], u[2]});
-    *p = s.center + d * s.radius;
-    *n = s.flipNormals ? -d : d;
-    return true;
-  }
-  const uint32_t* tri = &s.indices[3 * size_t(t)];
-  const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
-  const Vec2f bary = squareToTriangle({u[1], u[2]});
-  *p = a * bary.x + b * bary.y + c * (1 - bary.x - bary.y);
-  Vec3f ns;
-  return triangleNormals(s, t, bary.x, bary.y, 1 - bary.x - bary.y, n, &ns);
+  return pointOnPrimitive(desc_.shapes[size_t(shape)], t, {u[1], u[2]}, p, n);
 }
 
 Vec3f Scene::sampleEmission(int light, Vec2f u) const {
@@ -429,22 +434,14 @@ double Scene::trianglePickProbability(int light, uint32_t t) const {
 void Scene::sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const {
   const AreaLight& l = lights_[light];
   const ShapeDescription& s = desc_.shapes[l.shape];
-  if (s.type == ShapeDescription::Type::Sphere) {
-    Vec3f d = squareToUniformSphere({u[1], u[2]});
-    *p = s.center + d * s.radius;
-    *n = s.flipNormals ? -d : d;
-    return;
+  size_t t = 0;
+  if (s.type != ShapeDescription::Type::Sphere) {
+    const std::vector<double>& cdf = triangleCdf_[l.shape];
+    const double target = double(u[0]) * cdf.back();
+    t = std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin();
+    t = std::min(t, cdf.size() - 1);
   }
-  const std::vector<double>& cdf = triangleCdf_[l.shape];
-  const double target = double(u[0]) * cdf.back();
-  size_t t = std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin();
-  t = std::min(t, cdf.size() - 1);
-  const uint32_t* tri = &s.indices[3 * t];
-  const Vec3f &a = s.positions[tri[0]], &b = s.positions[tri[1]], &c = s.positions[tri[2]];
-  Vec2f bary = squareToTriangle({u[1], u[2]});
-  *p = a * bary.x + b * bary.y + c * (1 - bary.x - bary.y);
-  Vec3f ns;
-  triangleNormals(s, uint32_t(t), bary.x, bary.y, 1 - bary.x - bary.y, n, &ns);
+  pointOnPrimitive(s, uint32_t(t), {u[1], u[2]}, p, n);
 }
 
 }  // namespace farm

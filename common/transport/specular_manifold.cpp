@@ -105,7 +105,6 @@ bool constraintBlocks(const Scene& scene, const PathVertex& v, const VertexGeome
   // A tangent frame of the shading normal.
   const Frame frame(Vec3f(float(g.n.x), float(g.n.y), float(g.n.z)));
   const V3 s(frame.s), t(frame.t);
-  auto row = [&](const V3& axis, const V3& dh) { return dot(axis, dh); };
   // d h / d x_{i-1} = eta_i (I - wi wi^T) / di, d h / d x_{i+1} likewise, d h / d x_i = minus
   // their sum; the frame turns with the normal: d (s . h) = s . dh - (h . n) (s . dn) where h
   // is parallel to n (the chain satisfies its constraints).
@@ -119,12 +118,12 @@ bool constraintBlocks(const Scene& scene, const PathVertex& v, const VertexGeome
     const V3 dSelf =
         (directionChange(wi, di, *basis[c]) * etaI + directionChange(wo, dout, *basis[c]) * etaO) *
         -1.0;
-    out->previous.m[0][c] = row(s, dPrev);
-    out->previous.m[1][c] = row(t, dPrev);
-    out->next.m[0][c] = row(s, dNext);
-    out->next.m[1][c] = row(t, dNext);
-    out->self.m[0][c] = row(s, dSelf) - hn * dot(s, *normalChange[c]);
-    out->self.m[1][c] = row(t, dSelf) - hn * dot(t, *normalChange[c]);
+    out->previous.m[0][c] = dot(s, dPrev);
+    out->previous.m[1][c] = dot(t, dPrev);
+    out->next.m[0][c] = dot(s, dNext);
+    out->next.m[1][c] = dot(t, dNext);
+    out->self.m[0][c] = dot(s, dSelf) - hn * dot(s, *normalChange[c]);
+    out->self.m[1][c] = dot(t, dSelf) - hn * dot(t, *normalChange[c]);
   }
   return true;
 }

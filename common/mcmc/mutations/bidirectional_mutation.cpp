@@ -119,23 +119,12 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
     const int index = L + j;
     PathVertex v;
     if (index == 0) {
-      // A light vertex as BDPT starts its light subpaths (Path's densities are BDPT's): a point
-      // light's position, or a point of an area light by area.
+      // A light vertex as BDPT starts its light subpaths (the environment is refused when the
+      // scene loads).
       if (scene.lights().empty()) return false;
-      float pickPdf;
-      int light = scene.pickLight(rng.nextFloat(), &pickPdf);
-      float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
-      const AreaLight& info = scene.lights()[size_t(light)];
-      if (info.isEnvironment()) return false;  // refused when the scene loads
-      v.kind = PathVertex::Kind::Light;
-      v.light = light;
-      v.shape = info.shape;
-      if (info.isPoint()) {
-        v.p = scene.pointLight(light).position();
-      } else {
-        scene.sampleLightPoint(light, u, &v.p, &v.n);
-        v.ns = v.n;
-      }
+      const float uPick = rng.nextFloat();
+      const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+      if (!sampleLightVertex(scene, uPick, u, &v)) return false;
     } else if (index == 1) {
       // Its emission, as BDPT's light subpaths leave: a point light's direction by its own
       // distribution, an area light's by Scene::sampleEmission.

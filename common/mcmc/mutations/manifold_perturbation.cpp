@@ -1,6 +1,5 @@
 #include "common/mcmc/mutations/manifold_perturbation.h"
 
-#include <algorithm>
 #include <cmath>
 
 #include "common/mcmc/mutations/lens_perturbation.h"
@@ -8,22 +7,6 @@
 #include "common/transport/specular_manifold.h"
 
 namespace farm {
-
-namespace {
-
-// Whether the reverse walk found x's chain: each vertex where x has it, up to a thousandth of
-// its shorter edge (the walks converge to a millionth of the scene; another solution of the
-// constraints lies a visible distance away).
-bool sameChain(const Path& x, const Path& back, int e, int m) {
-  for (int i = e + 1; i < m; ++i) {
-    const double edge =
-        std::min(double(length(x[i].p - x[i - 1].p)), double(length(x[i + 1].p - x[i].p)));
-    if (!(double(length(back[i].p - x[i].p)) <= 1e-3 * edge)) return false;
-  }
-  return true;
-}
-
-}  // namespace
 
 ManifoldPerturbation::ManifoldPerturbation(const MutationContext& context)
     : Mutation(context), sizes_(perturbationSizes(context.scene.camera())) {}
@@ -53,7 +36,8 @@ bool ManifoldPerturbation::propose(const Path& x, Rng& rng, Path* y, MutationRec
   if (!manifoldWalk(context_, x, e, m, lens[m], y, &stats_)) return false;
   for (int i = m + 1; i <= k; ++i) (*y)[i] = lens[i];
   Path back;
-  if (!manifoldWalk(context_, *y, e, m, x[m], &back, &stats_) || !sameChain(x, back, e, m)) {
+  if (!manifoldWalk(context_, *y, e, m, x[m], &back, &stats_) ||
+      !sameSpecularChain(x, back, e, m)) {
     ++irreversible_;
     return false;
   }

@@ -28,6 +28,15 @@ bool project(const MutationContext& context, const Path& x, int a, int b, const 
 
 }  // namespace
 
+bool sameSpecularChain(const Path& a, const Path& b, int first, int last) {
+  for (int i = first + 1; i < last; ++i) {
+    const double edge =
+        std::min(double(length(a[i].p - a[i - 1].p)), double(length(a[i + 1].p - a[i].p)));
+    if (a[i].shape != b[i].shape || !(double(length(b[i].p - a[i].p)) <= 1e-3 * edge)) return false;
+  }
+  return true;
+}
+
 double manifoldWalkTolerance(const Scene& scene, const Vec3f& target) {
   return 1e-6 * (double(maxAbsComponent(target)) + double(scene.extent()));
 }
@@ -49,27 +58,22 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
     if (distance < tolerance) break;
     if (step == kMaxSteps) return false;
     if (stats) ++stats->iterations;
-    // Newton: the end should move by r (in its tangent plane); x_{a+1} by the derivative times it.
-    SurfaceDifferential end, first;
+    // Newton: the end should move by r (in its tangent plane); x_{a+1} by the derivative times it,
+    // both in the tangent bases of their geometric normals (Scene::surfaceDifferential's).
     Matrix2 d;
-    if (!scene.surfaceDifferential(current[b].shape, current[b].primitive, current[b].p,
-                                   current[b].n, &end) ||
-        !scene.surfaceDifferential(current[a + 1].shape, current[a + 1].primitive, current[a + 1].p,
-                                   current[a + 1].n, &first) ||
-        !specularChainDerivative(scene, current, a, b, true, &d))
-      return false;
-    const double du = dot(r, end.dpdu), dv = dot(r, end.dpdv);
+    if (!specularChainDerivative(scene, current, a, b, true, &d)) return false;
+    const Frame end(current[b].n), first(current[a + 1].n);
+    const double du = dot(r, end.s), dv = dot(r, end.t);
     const double su = d.m[0][0] * du + d.m[0][1] * dv, sv = d.m[1][0] * du + d.m[1][1] * dv;
     bool moved = false;
     while (!moved) {
-      const Vec3f q =
-          current[a + 1].p + first.dpdu * float(beta * su) + first.dpdv * float(beta * sv);
+      const Vec3f q = current[a + 1].p + first.s * float(beta * su) + first.t * float(beta * sv);
       if (++projections > kMaxProjections) return false;
       Path trial = current;
       // Aimed from where the ray leaves x_a (a little off its surface), so that it meets x_{a+1}'s
       // surface at q itself: aimed from x_a, it would land a little beside q, the same little
       // every step, and the walk would stall there.
-      const Vec3f w = normalize(q - scene.spawnRay(current[a].p, current[a].n, q - current[a].p).o);
+      const Vec3f w = aimedDirection(scene, current[a], q);
       if (project(context, x, a, b, w, &trial) &&
           double(length(target.p - trial[b].p)) < distance) {
         current = std::move(trial);

@@ -31,6 +31,11 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
                   const PathVertex& target, Path* y, ManifoldWalkStats* stats = nullptr,
                   std::vector<double>* residuals = nullptr);
 
+// Whether b's chain between x_first and x_last is a's, the same solution of the constraints: each
+// inner vertex on a's shape and within a thousandth of its shorter edge in a of a's (walks
+// converge to a millionth of the scene; distinct solutions lie a visible distance apart).
+bool sameSpecularChain(const Path& a, const Path& b, int first, int last);
+
 // The tolerance within which a walk's chain ends at its target.
 double manifoldWalkTolerance(const Scene& scene, const Vec3f& target);
 

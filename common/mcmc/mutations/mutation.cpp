@@ -73,7 +73,30 @@ bool specularBounce(const Scene& scene, const PathVertex& at, const Vec3f& from,
 }
 
 Vec3f tracedDirection(const Scene& scene, const PathVertex& from, const PathVertex& to) {
-  return normalize(to.p - scene.spawnRay(from.p, from.n, to.p - from.p).o);
+  return aimedDirection(scene, from, to.p);
+}
+
+Vec3f aimedDirection(const Scene& scene, const PathVertex& from, const Vec3f& point) {
+  return normalize(point - scene.spawnRay(from.p, from.n, point - from.p).o);
+}
+
+bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVertex* v) {
+  if (scene.lights().empty()) return false;
+  float pickPdf;
+  const int light = scene.pickLight(uPick, &pickPdf);
+  const AreaLight& info = scene.lights()[size_t(light)];
+  if (info.isEnvironment()) return false;
+  *v = PathVertex();
+  v->kind = PathVertex::Kind::Light;
+  v->light = light;
+  v->shape = info.shape;
+  if (info.isPoint()) {
+    v->p = scene.pointLight(light).position();
+  } else {
+    scene.sampleLightPoint(light, u, &v->p, &v->n);
+    v->ns = v->n;
+  }
+  return true;
 }
 
 double angleBetween(const Vec3f& a, const Vec3f& b) {

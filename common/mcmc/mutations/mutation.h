@@ -105,6 +105,13 @@ Vec2f perturbFilm(const Vec2f& film, double r1, double r2, Rng& rng);
 // and compare these, so that an angle sampled at one end of an edge is the angle measured there
 // afterwards (over an edge of a millimetre the two origins differ by a tenth of a radian).
 Vec3f tracedDirection(const Scene& scene, const PathVertex& from, const PathVertex& to);
+// The same towards a point: the direction that makes a ray leaving `from` pass through it.
+Vec3f aimedDirection(const Scene& scene, const PathVertex& from, const Vec3f& point);
+
+// A light vertex as BDPT starts its light subpaths (Path's densities are BDPT's): light
+// `uPick` picks by power, then a point light's position or a point of an area light by area
+// (u). False for the environment, or a scene without lights.
+bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVertex* v);
 
 // Angle between two unit vectors, accurate for small angles.
 double angleBetween(const Vec3f& a, const Vec3f& b);
