@@ -28,7 +28,7 @@
 #include <functional>
 
 #include "common/mcmc/mutations/mutation.h"
-#include "common/transport/sampler.h"
+#include "common/sampling/sampler.h"
 
 namespace farm {
 

@@ -17,7 +17,7 @@
 #include "common/chain/algorithm.h"
 #include "common/film/splat_buffer.h"
 #include "common/scene/scene.h"
-#include "common/transport/sampler.h"
+#include "common/sampling/sampler.h"
 
 namespace farm {
 

@@ -9,7 +9,7 @@
 
 #include "common/math/vec.h"
 #include "common/sampling/rng.h"
-#include "common/transport/sampler.h"
+#include "common/sampling/sampler.h"
 
 namespace farm {
 

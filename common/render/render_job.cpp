@@ -345,6 +345,16 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
                              " yet (its mutations build paths from lights at finite points "
                              "only): use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
   }
+  // Participating media: path tracing tracks them (and PSSMLT over it, which draws the same
+  // paths); the bidirectional and path-space algorithms do not yet.
+  bool media = !desc.media.empty();
+  for (const ShapeDescription& s : desc.shapes) media = media || s.nullBoundary;
+  if (media && settings.algorithm != Algorithm::PathTracing &&
+      settings.algorithm != Algorithm::PSSMLTOverPT) {
+    throw SceneLoadError(path, 0,
+                         std::string("participating media are not supported by ") +
+                             algorithmName(settings.algorithm) + " yet: use pt or pssmlt-pt");
+  }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);
   }

@@ -17,7 +17,7 @@
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/scene.h"
 #include "common/transport/bidirectional.h"
-#include "common/transport/sampler.h"
+#include "common/sampling/sampler.h"
 
 namespace farm {
 namespace {

@@ -92,6 +92,32 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
   }
   bsdfs_.emplace_back(BsdfDescription{});  // default diffuse for shapes without a bsdf
 
+  // Media, and the references to them, checked for descriptions built by hand too.
+  const int numMedia = int(desc_.media.size());
+  for (const MediumDescription& m : desc_.media) {
+    const std::string problem = mediumProblem(m);
+    if (!problem.empty())
+      throw std::invalid_argument("medium " + (m.origin.empty() ? m.id : m.origin) + ": " +
+                                  problem);
+    media_.emplace_back(m);
+  }
+  auto mediumInRange = [&](int m) { return m >= -1 && m < numMedia; };
+  if (!mediumInRange(desc_.camera.medium))
+    throw std::invalid_argument("the camera's medium " + std::to_string(desc_.camera.medium) +
+                                " is not one of the scene's " + std::to_string(numMedia));
+  tracksMedia_ = numMedia > 0;
+  for (const ShapeDescription& s : desc_.shapes) {
+    if (!mediumInRange(s.interiorMedium) || !mediumInRange(s.exteriorMedium))
+      throw std::invalid_argument("shape " + s.origin +
+                                  " refers to a medium that is not one of the "
+                                  "scene's " +
+                                  std::to_string(numMedia));
+    if (s.nullBoundary && s.isEmitter)
+      throw std::invalid_argument("shape " + s.origin +
+                                  " emits light and is a null medium boundary: give it a BSDF");
+    tracksMedia_ = tracksMedia_ || s.nullBoundary;
+  }
+
   RTCDevice device = rtcNewDevice(nullptr);
   if (!device) throw std::runtime_error("Embree: cannot create a device");
   device_ = device;
@@ -401,6 +427,58 @@ bool Scene::escapes(const Vec3f& p, const Vec3f& ng, const Vec3f& w) const {
   ray.time = 0;
   rtcOccluded1(static_cast<RTCScene>(scene_), &context, &ray);
   return ray.tfar >= 0;  // Embree sets tfar to -inf on a hit
+}
+
+int Scene::mediumOnSide(int shape, const Vec3f& ng, const Vec3f& w, int current) const {
+  const ShapeDescription& s = desc_.shapes[size_t(shape)];
+  if (!s.hasMediumInterface) return current;
+  return dot(w, ng) > 0 ? s.exteriorMedium : s.interiorMedium;
+}
+
+Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, const Vec3f& d, const Vec3f* end,
+                                   const Vec3f* rayEnd, int medium, Sampler& sampler,
+                                   SampleStream stream) const {
+  Spectrum T(1.0f);
+  // Each pass crosses one null boundary; a cap keeps a degenerate stack of them finite. The
+  // rays start off the surfaces (o, rayEnd); the media count from the surfaces themselves
+  // (start, end), or a crossing would skip the offset's length of each medium.
+  for (int crossing = 0; crossing < 1024; ++crossing) {
+    Ray r{o, d, rayEnd ? dot(*rayEnd - o, d) : kInfinity};
+    if (!(r.tMax > 0)) r.tMax = 0;
+    SurfaceHit hit;
+    const bool found = r.tMax > 0 && intersect(r, &hit);
+    if (medium >= 0) {
+      const float length =
+          found ? farm::length(hit.p - start) : (end ? farm::length(*end - start) : kInfinity);
+      T *= media_[size_t(medium)].transmittance(start, d, length, sampler, stream);
+    }
+    if (!found) return T;
+    if (!desc_.shapes[size_t(hit.shape)].nullBoundary || isBlack(T)) return Spectrum(0.0f);
+    medium = mediumOnSide(hit.shape, hit.ng, d, medium);
+    start = hit.p;
+    o = spawnRay(hit.p, hit.ng, d).o;
+  }
+  return Spectrum(0.0f);
+}
+
+Spectrum Scene::transmittance(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1,
+                              int medium, Sampler& sampler, SampleStream stream) const {
+  if (!tracksMedia_) return visible(p0, n0, p1, n1) ? Spectrum(1.0f) : Spectrum(0.0f);
+  // The ray's end points offset off their surfaces as visible() does.
+  const Vec3f d = p1 - p0;
+  Vec3f o = p0, e = p1;
+  if (lengthSquared(n0) > 0) o = p0 + n0 * ((dot(n0, d) >= 0 ? 1.0f : -1.0f) * offsetFor(p0));
+  if (lengthSquared(n1) > 0) e = p1 + n1 * ((dot(n1, d) <= 0 ? 1.0f : -1.0f) * offsetFor(p1));
+  const float length = farm::length(d);
+  if (!(length > 0)) return Spectrum(1.0f);
+  return transmittanceAlong(p0, o, d / length, &p1, &e, medium, sampler, stream);
+}
+
+Spectrum Scene::transmittanceToInfinity(const Vec3f& p, const Vec3f& n, const Vec3f& w, int medium,
+                                        Sampler& sampler, SampleStream stream) const {
+  if (!tracksMedia_) return escapes(p, n, w) ? Spectrum(1.0f) : Spectrum(0.0f);
+  const Vec3f o = lengthSquared(n) > 0 ? spawnRay(p, n, w).o : p;
+  return transmittanceAlong(p, o, w, nullptr, nullptr, medium, sampler, stream);
 }
 
 int Scene::pickLight(float u, float* pdf) const {

@@ -8,6 +8,7 @@
 #include "common/scene/bsdf.h"
 #include "common/scene/camera.h"
 #include "common/scene/environment_light.h"
+#include "common/scene/medium.h"
 #include "common/scene/point_light.h"
 #include "common/scene/scene_description.h"
 
@@ -148,7 +149,35 @@ class Scene {
   // picks with the first number (rescaled, so that stratified numbers stay stratified).
   Vec3f sampleEmission(int light, Vec2f u) const;
 
+  // ---- Participating media ----
+  // True when the scene has media or surfaces that only bound them: then rays pass null
+  // boundaries (which visible() and escapes() would take for blockers) and lose light along the
+  // way, and only the transport code that tracks media may render it.
+  bool hasMedia() const { return tracksMedia_; }
+  const Medium& medium(int i) const { return media_[size_t(i)]; }
+  int cameraMedium() const { return desc_.camera.medium; }
+  bool isNullBoundary(int shape) const { return desc_.shapes[size_t(shape)].nullBoundary; }
+  // The medium on the side of a surface point (geometric normal ng) that direction w points
+  // to, for a ray that was in `current`: the shape's exterior or interior medium when it has a
+  // medium interface, else `current` (a surface without one leaves the medium as it is).
+  int mediumOnSide(int shape, const Vec3f& ng, const Vec3f& w, int current) const;
+  // The transmittance between two points (n = 0 for a point in a medium or on the camera),
+  // starting in `medium` (-1: vacuum): 0 when a surface other than a null boundary blocks the
+  // segment; the media crossed change at each null boundary. An unbiased estimate with numbers
+  // from `stream` where a grid medium lies on the way; exact otherwise.
+  Spectrum transmittance(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1,
+                         int medium, Sampler& sampler, SampleStream stream) const;
+  // The same for the ray from p in direction w out of the scene (to the environment).
+  Spectrum transmittanceToInfinity(const Vec3f& p, const Vec3f& n, const Vec3f& w, int medium,
+                                   Sampler& sampler, SampleStream stream) const;
+
  private:
+  // transmittance()'s walk along unit d from surface point `start` (its ray from o, offset off
+  // the surface) to `end` (its ray to rayEnd), or to infinity when they are null.
+  Spectrum transmittanceAlong(Vec3f start, Vec3f o, const Vec3f& d, const Vec3f* end,
+                              const Vec3f* rayEnd, int medium, Sampler& sampler,
+                              SampleStream stream) const;
+
   float offsetFor(const Vec3f& p) const;
 
   SceneDescription desc_;
@@ -166,6 +195,8 @@ class Scene {
   std::unique_ptr<EnvironmentLight> environment_;
   std::vector<PointLight> pointLights_;
   int environmentLight_ = -1;
+  std::vector<Medium> media_;
+  bool tracksMedia_ = false;
   void* device_ = nullptr;  // RTCDevice
   void* scene_ = nullptr;   // RTCScene
 };

@@ -31,6 +31,7 @@ struct CameraDescription {
   // this distance along the view direction; 0: a pinhole.
   float lensRadius = 0;
   float focusDistance = 1;
+  int medium = -1;  // index into SceneDescription::media the camera sits in; -1: vacuum
 };
 
 enum class MicrofacetDistribution { Beckmann, GGX };
@@ -94,8 +95,38 @@ struct ShapeDescription {
   bool isEmitter = false;
   Spectrum radiance{0.0f};      // area emitter radiance (emits on the side the normal faces)
   bool emitsBothSides = false;  // pbrt's "twosided" area light: the same radiance on both
+  // Participating media on either side of the surface (indices into SceneDescription::media,
+  // -1 for vacuum), the interior on the side opposite the normal. With neither set the surface
+  // leaves a ray's medium as it is (pbrt's rule); nullBoundary: the surface does not scatter at
+  // all and only marks where one medium ends and the other begins (Mitsuba's shape with a
+  // medium and no BSDF, pbrt's "interface" material).
+  bool hasMediumInterface = false;
+  int interiorMedium = -1, exteriorMedium = -1;
+  bool nullBoundary = false;
   // Where it came from, for messages
   std::string origin;  // e.g. "scene.xml:42 (obj models/Mesh001.obj)"
+};
+
+// A participating medium: extinction sigma_t = sigma_a + sigma_s (per unit of world length),
+// scattering by the Henyey-Greenstein phase function of mean cosine g. Homogeneous: sigmaA and
+// sigmaS everywhere. Grid: sigmaA and sigmaS times a density that a grid of nx * ny * nz values
+// (x fastest) gives by trilinear interpolation over the unit cube of the grid's own space
+// (worldToGrid takes world points there; the density is 0 outside). Values at cell centres
+// (pbrt-v3: sample i at (i + 0.5) / n) or at cell corners (Mitsuba's gridvolume: sample i at
+// i / (n - 1)). A grid's sigma_t must be grey (equal in every channel: distances are sampled
+// by delta tracking against one majorant, as Mitsuba's heterogeneous medium does); its albedo
+// may have colour.
+struct MediumDescription {
+  enum class Type { Homogeneous, Grid };
+  Type type = Type::Homogeneous;
+  Spectrum sigmaA{0.0f}, sigmaS{0.0f};
+  float g = 0;  // in (-1, 1)
+  int nx = 0, ny = 0, nz = 0;
+  std::vector<float> density;
+  bool cellCentred = true;
+  Matrix4 worldToGrid = Matrix4::identity();
+  std::string id;      // the file's name for it, or empty
+  std::string origin;  // "scene.xml:12 (homogeneous)", for messages
 };
 
 // Light from infinitely far away (Mitsuba's constant and envmap, pbrt's infinite): the radiance
@@ -141,6 +172,7 @@ struct SceneDescription {
   std::vector<ShapeDescription> shapes;
   EnvironmentDescription environment;
   std::vector<PointLightDescription> pointLights;
+  std::vector<MediumDescription> media;
   // What the loader changed or left out, one line each ("FILE:LINE: ..."), for the user.
   std::vector<std::string> warnings;
 };

@@ -10,7 +10,7 @@
 #include "common/film/splat_buffer.h"
 #include "common/scene/scene.h"
 #include "common/transport/path_vertex.h"
-#include "common/transport/sampler.h"
+#include "common/sampling/sampler.h"
 
 namespace farm {
 

@@ -1,6 +1,7 @@
 #include "common/transport/path_tracer.h"
 
 #include <cmath>
+#include <stdexcept>
 
 namespace farm {
 
@@ -15,13 +16,90 @@ float powerHeuristic(float a, float b) {
 PathTracer::PathTracer(const Scene& scene, int maxDepth)
     : scene_(scene), maxDepth_(maxDepth < 0 ? kUnboundedDepth : maxDepth) {}
 
+template <typename Scatter, typename Add>
+void PathTracer::nextEvent(const Vec3f& p, const Vec3f& n, const Spectrum& beta,
+                           const float uLight[4], Sampler& sampler, const Scatter& scatter,
+                           bool record, const Add& add) const {
+  float pickPdf;
+  const int l = scene_.pickLight(uLight[0], &pickPdf);
+  Spectrum fs;
+  float scatterPdf;
+  int medium;
+  if (scene_.lights()[l].isPoint()) {
+    // The light's position; no scattering sample reaches a point, so no MIS.
+    const PointLight& point = scene_.pointLight(l);
+    const Vec3f d = point.position() - p;
+    const float d2 = lengthSquared(d);
+    if (!(d2 > 0)) return;
+    const Vec3f wiW = d / std::sqrt(d2);
+    const Spectrum I = point.intensity(-wiW);
+    if (isBlack(I) || !scatter(wiW, &fs, &scatterPdf, &medium)) return;
+    ++rays_;
+    const Spectrum T =
+        scene_.transmittance(p, n, point.position(), Vec3f(0.0f), medium, sampler, kCameraStream);
+    if (isBlack(T)) return;
+    PathVertex lightVertex;
+    if (record) {
+      lightVertex.kind = PathVertex::Kind::Light;
+      lightVertex.p = point.position();
+      lightVertex.light = l;
+    }
+    add(beta * fs * I * T / (d2 * pickPdf), &lightVertex);
+  } else if (l == scene_.environmentLight()) {
+    // A direction of the environment, by its importance; unblocked, it reaches it.
+    float pdfDir;
+    const Vec3f wiW = scene_.environment()->sample({uLight[1], uLight[2]}, &pdfDir);
+    if (!(pdfDir > 0)) return;
+    const Spectrum Le = scene_.environment()->radiance(wiW);
+    if (isBlack(Le) || !scatter(wiW, &fs, &scatterPdf, &medium)) return;
+    const float pdfLight = pickPdf * pdfDir;
+    ++rays_;
+    const Spectrum T = scene_.transmittanceToInfinity(p, n, wiW, medium, sampler, kCameraStream);
+    if (isBlack(T)) return;
+    PathVertex lightVertex;
+    if (record) lightVertex = vertexAtInfinity(scene_, l, p, wiW);
+    add(beta * fs * Le * T * (powerHeuristic(pdfLight, scatterPdf) / pdfLight), &lightVertex);
+  } else {
+    Vec3f pl, nl;
+    scene_.sampleLightPoint(l, &uLight[1], &pl, &nl);
+    const Vec3f d = pl - p;
+    const float d2 = lengthSquared(d);
+    if (!(d2 > 0)) return;
+    const Vec3f wiW = d / std::sqrt(d2);
+    const Spectrum Le = scene_.emitted(l, nl, -wiW);
+    const float cosL = absDot(nl, wiW);
+    if (isBlack(Le) || !(cosL > 0) || !scatter(wiW, &fs, &scatterPdf, &medium)) return;
+    const float pdfLight = pickPdf / scene_.lights()[l].area * d2 / cosL;
+    ++rays_;
+    const Spectrum T = scene_.transmittance(p, n, pl, nl, medium, sampler, kCameraStream);
+    if (isBlack(T)) return;
+    PathVertex lightVertex;
+    if (record) {
+      lightVertex.kind = PathVertex::Kind::Light;
+      lightVertex.p = pl;
+      lightVertex.n = lightVertex.ns = nl;
+      lightVertex.shape = scene_.lights()[l].shape;
+      lightVertex.light = l;
+    }
+    add(beta * fs * Le * T * (powerHeuristic(pdfLight, scatterPdf) / pdfLight), &lightVertex);
+  }
+}
+
 template <typename Add>
 void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVertex>* vertices,
                       const Add& add) const {
+  // Paths through media are not recorded vertex by vertex yet: ERPT, the only caller that asks
+  // for vertices, refuses scenes with media when it loads them.
+  if (vertices && scene_.hasMedia())
+    throw std::logic_error("PathTracer: path vertices in participating media are not recorded");
   Spectrum beta(1.0f);
   Ray ray = primary;
+  int medium = scene_.cameraMedium();  // the medium the ray travels in (-1: vacuum)
+  // Where the ray's segment through its medium begins: the ray's origin is offset off the
+  // surface it leaves, the medium counts from the surface point itself.
+  Vec3f mediumStart = ray.o;
   bool previousDelta = true;  // the camera ray cannot be light-sampled
-  float previousPdf = 0;      // solid-angle density of the last BSDF sample
+  float previousPdf = 0;      // solid-angle density of the last BSDF or phase sample
   Vec3f previousP = ray.o;
   if (vertices) {
     vertices->clear();
@@ -31,9 +109,69 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     vertices->push_back(camera);
   }
   for (int depth = 1;; ++depth) {
+    // The next vertex: the first surface along the ray that is not a null boundary, or a
+    // scattering event in a medium before it (null boundaries only change the medium).
     SurfaceHit hit;
-    ++rays_;
-    if (!scene_.intersect(ray, &hit)) {
+    bool found;
+    MediumInteraction event;
+    Spectrum segmentWeight(1.0f);
+    for (;;) {
+      ++rays_;
+      found = scene_.intersect(ray, &hit);
+      if (medium >= 0) {
+        event = scene_.medium(medium).sampleInteraction(
+            mediumStart, ray.d, found ? length(hit.p - mediumStart) : kInfinity, sampler,
+            kCameraStream);
+        segmentWeight *= event.weight;
+        if (event.scattered) break;
+      }
+      if (!found || !scene_.isNullBoundary(hit.shape)) break;
+      medium = scene_.mediumOnSide(hit.shape, hit.ng, ray.d, medium);
+      ray = scene_.spawnRay(hit.p, hit.ng, ray.d);
+      mediumStart = hit.p;
+    }
+    beta *= segmentWeight;
+    if (isBlack(beta)) break;
+
+    if (event.scattered) {
+      // A vertex in the medium: the phase function scatters, next-event estimation as at a
+      // surface, with the phase function for the BSDF and no cosine.
+      if (depth >= maxDepth_) break;
+      const Vec3f p = mediumStart + ray.d * event.t;
+      const HenyeyGreenstein phase = scene_.medium(medium).phase();
+      const Vec3f wo = -ray.d;
+      float uLight[4] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
+                         sampler.next(kCameraStream), sampler.next(kCameraStream)};
+      if (depth + 1 <= maxDepth_ && !scene_.lights().empty()) {
+        nextEvent(
+            p, Vec3f(0.0f), beta, uLight, sampler,
+            [&](const Vec3f& wiW, Spectrum* f, float* pdf, int* toward) {
+              *pdf = phase.eval(wo, wiW);
+              *f = Spectrum(*pdf);
+              *toward = medium;
+              return *pdf > 0;
+            },
+            false, add);
+      }
+      const Vec2f u(sampler.next(kCameraStream), sampler.next(kCameraStream));
+      const float uRoulette = sampler.next(kCameraStream);
+      float pdf;
+      const Vec3f wi = phase.sample(wo, u, &pdf);
+      if (!(pdf > 0)) break;
+      previousDelta = false;
+      previousPdf = pdf;
+      previousP = p;
+      if (depth >= kRussianRouletteDepth) {
+        const float q = russianRouletteSurvival(maxComponent(segmentWeight));
+        if (uRoulette >= q) break;
+        beta /= q;
+      }
+      ray = Ray{p, wi};
+      mediumStart = p;
+      continue;
+    }
+
+    if (!found) {
       const int environment = scene_.environmentLight();
       if (environment < 0) break;
       // The ray leaves the scene: the environment's radiance from its direction.
@@ -86,79 +224,18 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     float uLight[4] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
                        sampler.next(kCameraStream), sampler.next(kCameraStream)};
     if (!bsdf.isDelta() && depth + 1 <= maxDepth_ && !scene_.lights().empty()) {
-      float pickPdf;
-      int l = scene_.pickLight(uLight[0], &pickPdf);
-      if (scene_.lights()[l].isPoint()) {
-        // The light's position; no BSDF sample reaches a point, so no MIS.
-        const PointLight& point = scene_.pointLight(l);
-        const Vec3f d = point.position() - hit.p;
-        const float d2 = lengthSquared(d);
-        if (d2 > 0) {
-          const Vec3f wiW = d / std::sqrt(d2);
-          const Vec3f wi = frame.toLocal(wiW);
-          const Spectrum I = point.intensity(-wiW);
-          const Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
-          if (!isBlack(I) && !isBlack(f) && sidesAgree(wiW, hit.ng, hit.ns)) {
-            ++rays_;
-            if (scene_.visible(hit.p, hit.ng, point.position(), Vec3f(0.0f))) {
-              PathVertex lightVertex;
-              if (vertices) {
-                lightVertex.kind = PathVertex::Kind::Light;
-                lightVertex.p = point.position();
-                lightVertex.light = l;
-              }
-              add(beta * f * I * (std::fabs(wi.z) / (d2 * pickPdf)), &lightVertex);
-            }
-          }
-        }
-      } else if (l == scene_.environmentLight()) {
-        // A direction of the environment, by its importance; unblocked, it reaches it.
-        float pdfDir;
-        const Vec3f wiW = scene_.environment()->sample({uLight[1], uLight[2]}, &pdfDir);
-        const Vec3f wi = frame.toLocal(wiW);
-        if (pdfDir > 0 && sidesAgree(wiW, hit.ng, hit.ns)) {
-          const Spectrum Le = scene_.environment()->radiance(wiW);
-          const Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
-          const float pdfLight = pickPdf * pdfDir;
-          if (!isBlack(Le) && !isBlack(f)) {
-            ++rays_;
-            if (scene_.escapes(hit.p, hit.ng, wiW)) {
-              PathVertex lightVertex;
-              if (vertices) lightVertex = vertexAtInfinity(scene_, l, hit.p, wiW);
-              float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
-              add(beta * f * Le * (std::fabs(wi.z) * w / pdfLight), &lightVertex);
-            }
-          }
-        }
-      } else {
-        Vec3f pl, nl;
-        scene_.sampleLightPoint(l, &uLight[1], &pl, &nl);
-        Vec3f d = pl - hit.p;
-        float d2 = lengthSquared(d);
-        if (d2 > 0) {
-          Vec3f wiW = d / std::sqrt(d2);
-          Spectrum Le = scene_.emitted(l, nl, -wiW);
-          float cosL = absDot(nl, wiW);
-          Vec3f wi = frame.toLocal(wiW);
-          Spectrum f = bsdf.eval(wo, wi, TransportMode::Radiance);
-          if (!isBlack(Le) && !isBlack(f) && cosL > 0 && sidesAgree(wiW, hit.ng, hit.ns)) {
-            float pdfLight = pickPdf / scene_.lights()[l].area * d2 / cosL;
-            ++rays_;
-            if (scene_.visible(hit.p, hit.ng, pl, nl)) {
-              float w = powerHeuristic(pdfLight, bsdf.pdf(wo, wi));
-              PathVertex lightVertex;
-              if (vertices) {
-                lightVertex.kind = PathVertex::Kind::Light;
-                lightVertex.p = pl;
-                lightVertex.n = lightVertex.ns = nl;
-                lightVertex.shape = scene_.lights()[l].shape;
-                lightVertex.light = l;
-              }
-              add(beta * f * Le * (std::fabs(wi.z) * w / pdfLight), &lightVertex);
-            }
-          }
-        }
-      }
+      nextEvent(
+          hit.p, hit.ng, beta, uLight, sampler,
+          [&](const Vec3f& wiW, Spectrum* f, float* pdf, int* toward) {
+            if (!sidesAgree(wiW, hit.ng, hit.ns)) return false;
+            const Vec3f wi = frame.toLocal(wiW);
+            *f = bsdf.eval(wo, wi, TransportMode::Radiance) * std::fabs(wi.z);
+            if (isBlack(*f)) return false;
+            *pdf = bsdf.pdf(wo, wi);
+            *toward = scene_.mediumOnSide(hit.shape, hit.ng, wiW, medium);
+            return true;
+          },
+          vertices != nullptr, add);
     }
 
     float u[3] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
@@ -174,11 +251,13 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     previousPdf = bs.pdf;
     previousP = hit.p;
     if (depth >= kRussianRouletteDepth) {
-      float q = russianRouletteSurvival(maxComponent(bs.weight));
+      float q = russianRouletteSurvival(maxComponent(bs.weight * segmentWeight));
       if (uRoulette >= q) break;
       beta /= q;
     }
+    medium = scene_.mediumOnSide(hit.shape, hit.ng, wiWorld, medium);
     ray = scene_.spawnRay(hit.p, hit.ng, wiWorld);
+    mediumStart = hit.p;
   }
 }
 

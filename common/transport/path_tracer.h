@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "common/film/splat_buffer.h"
+#include "common/sampling/sampler.h"
 #include "common/scene/scene.h"
 #include "common/transport/path_vertex.h"
-#include "common/transport/sampler.h"
 
 namespace farm {
 
@@ -48,6 +48,15 @@ class PathTracer {
   template <typename Add>
   void walk(const Ray& primary, Sampler& sampler, std::vector<PathVertex>* vertices,
             const Add& add) const;
+  // Next-event estimation from a path vertex at p (n: its geometric normal; 0 in a medium):
+  // picks a light and a point (or direction) of it, weights by the transmittance to it and the
+  // power heuristic against the vertex's own sampling. scatter(wi, &f, &pdf, &medium) gives the
+  // vertex's value towards world direction wi (the BSDF times the cosine, or the phase
+  // function), the density its own sampling has for wi, and the medium a ray towards wi starts
+  // in; false where wi is unusable. record: pass add the light vertex (visitPaths).
+  template <typename Scatter, typename Add>
+  void nextEvent(const Vec3f& p, const Vec3f& n, const Spectrum& beta, const float uLight[4],
+                 Sampler& sampler, const Scatter& scatter, bool record, const Add& add) const;
 
   const Scene& scene_;
   int maxDepth_;

@@ -20,9 +20,11 @@
 #include <utility>
 #include <vector>
 
+#include "common/scene/loaders/grid_volume_reader.h"
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/loaders/serialized_reader.h"
+#include "common/scene/medium.h"
 #include "common/scene/mesh_cleanup.h"
 
 namespace farm {
@@ -168,6 +170,8 @@ class MitsubaLoader {
         parseTopLevelEmitter(child);
       } else if (tag == "texture") {
         registerId(child, "texture", parseTexture(child));
+      } else if (tag == "medium") {
+        registerId(child, "medium", parseMedium(child));
       } else {
         failUnknownElement(child);
       }
@@ -305,7 +309,7 @@ class MitsubaLoader {
       fail(ref, "<ref id=\"" + key + "\">: the object declared at line " +
                     std::to_string(declared->second) +
                     " cannot be referenced (only top-level and shape-level bsdfs and top-level "
-                    "textures can)");
+                    "textures and media can)");
     }
     if (it->second.kind != kind)
       fail(ref, "<ref id=\"" + key + "\"> names a <" + it->second.kind + "> (line " +
@@ -583,7 +587,7 @@ class MitsubaLoader {
     if (pugi::xml_node t = props.take("toWorld")) cam.toWorld = transformOf(t);
 
     // The film first: Mitsuba resolves "smaller"/"larger" against the film's aspect ratio.
-    bool sawFilm = false;
+    bool sawFilm = false, sawCameraMedium = false;
     for (const pugi::xml_node& child : nested) {
       std::string_view tag = child.name();
       if (tag == "film") {
@@ -592,6 +596,11 @@ class MitsubaLoader {
         parseFilm(child);
       } else if (tag == "sampler") {
         // The farm chooses its own sampling.
+      } else if (tag == "medium" || tag == "ref") {
+        // The medium the camera sits in (Mitsuba's sensor medium).
+        if (sawCameraMedium) fail(child, "a sensor takes one medium");
+        sawCameraMedium = true;
+        cam.medium = tag == "ref" ? resolveRef(child, "medium") : parseMedium(child);
       } else {
         failUnknownElement(child);
       }
@@ -1054,6 +1063,145 @@ class MitsubaLoader {
                                          toWorld * mitsubaFromPbrt, filename, false);
   }
 
+  // <medium type="homogeneous">: sigmaA and sigmaS, or sigmaT and albedo, times scale.
+  // <medium type="heterogeneous">: sigma_t = scale times a density volume (a gridvolume file or
+  // a constvolume), a constant albedo. Either with a <phase> (isotropic or hg). Returns its
+  // index in scene_.media.
+  int parseMedium(const pugi::xml_node& node) {
+    checkAttributes(node, {"type", "id", "name"});
+    const std::string type = node.attribute("type").as_string();
+    if (type != "homogeneous" && type != "heterogeneous")
+      fail(node, "unknown or unsupported medium type '" + type +
+                     "' (homogeneous and heterogeneous only)");
+    std::vector<pugi::xml_node> nested;
+    PropertySet props = collectProperties(node, &nested);
+    MediumDescription m;
+    m.id = node.attribute("id").as_string();
+    m.origin = baseName_ + ":" + std::to_string(lineOf(node)) + " (" + type + ")";
+    if (pugi::xml_node n = props.take("material"))
+      fail(n,
+           "named medium materials (measured coefficients) are not supported: give sigmaA "
+           "and sigmaS");
+    const double scale = getNumber(props, "scale", getNumber(props, "densityMultiplier", 1.0));
+    if (!(scale >= 0) || !std::isfinite(scale)) fail(node, "a medium's scale must be >= 0");
+    bool sawPhase = false;
+    pugi::xml_node densityNode, albedoNode;
+    for (const pugi::xml_node& child : nested) {
+      const std::string_view tag = child.name();
+      if (tag == "phase") {
+        if (sawPhase) fail(child, "a medium takes one phase function");
+        sawPhase = true;
+        m.g = parsePhase(child);
+      } else if (tag == "volume" && type == "heterogeneous") {
+        const std::string name = child.attribute("name").as_string();
+        if (name != "density" && name != "albedo")
+          fail(child,
+               "a heterogeneous medium's volumes are 'density' and 'albedo', not '" + name + "'");
+        (name == "density" ? densityNode : albedoNode) = child;
+      } else {
+        failUnknownElement(child);
+      }
+    }
+    if (type == "homogeneous") {
+      const bool coefficients = props.has("sigmaA") || props.has("sigmaS");
+      const bool extinction = props.has("sigmaT") || props.has("albedo");
+      if (coefficients && extinction)
+        fail(node, "give sigmaA and sigmaS, or sigmaT and albedo, not both");
+      if (extinction) {
+        const Spectrum sigmaT = getSpectrum(props, "sigmaT", Spectrum(1.0f));
+        const Spectrum albedo = getSpectrum(props, "albedo", Spectrum(1.0f));
+        m.sigmaS = sigmaT * albedo;
+        m.sigmaA = sigmaT - m.sigmaS;
+      } else {
+        m.sigmaA = getSpectrum(props, "sigmaA", Spectrum(1.0f));
+        m.sigmaS = getSpectrum(props, "sigmaS", Spectrum(1.0f));
+      }
+      m.sigmaA *= float(scale);
+      m.sigmaS *= float(scale);
+    } else {
+      props.take("method");    // Woodcock tracking is what the farm does anyway
+      props.take("stepSize");  // ray marching's step: the farm's estimators need none
+      if (!densityNode) fail(node, "a heterogeneous medium needs a <volume name=\"density\">");
+      Spectrum albedo(1.0f);
+      if (albedoNode) albedo = constantVolume(albedoNode, "albedo");
+      const float constant = parseDensityVolume(densityNode, &m);
+      // Mitsuba: sigma_t = scale * density, sigma_s = sigma_t * albedo.
+      m.sigmaS = albedo * float(scale * constant);
+      m.sigmaA = Spectrum(float(scale * constant)) - m.sigmaS;
+    }
+    rejectUnused(props, "medium type '" + type + "'");
+    const std::string problem = mediumProblem(m);
+    if (!problem.empty()) fail(node, problem);
+    scene_.media.push_back(std::move(m));
+    return int(scene_.media.size()) - 1;
+  }
+
+  // <phase type="isotropic"/> or <phase type="hg"><float name="g" .../></phase>: the g of a
+  // Henyey-Greenstein phase function (0: isotropic).
+  double parsePhase(const pugi::xml_node& node) {
+    const std::string type = node.attribute("type").as_string();
+    PropertySet props = collectProperties(node, nullptr);
+    double g = 0;
+    if (type == "hg") {
+      g = getNumber(props, "g", 0.8);
+      if (!(std::fabs(g) < 1)) fail(node, "the Henyey-Greenstein g must lie in (-1, 1)");
+    } else if (type != "isotropic") {
+      fail(node, "unknown or unsupported phase function '" + type + "' (isotropic and hg only)");
+    }
+    rejectUnused(props, "phase function '" + type + "'");
+    return g;
+  }
+
+  // A constvolume's value (the albedo; a grid of albedos is not supported).
+  Spectrum constantVolume(const pugi::xml_node& node, const std::string& what) {
+    const std::string type = node.attribute("type").as_string();
+    if (type != "constvolume")
+      fail(node, "the " + what + " volume must be a constvolume (not '" + type + "')");
+    PropertySet props = collectProperties(node, nullptr);
+    const Spectrum v = getSpectrum(props, "value", Spectrum(1.0f));
+    rejectUnused(props, "volume type 'constvolume'");
+    return v;
+  }
+
+  // The density: a constvolume (the same everywhere: *m becomes homogeneous, and the value is
+  // returned as a factor of sigma_t) or a gridvolume file, whose samples span its bounding box
+  // corner to corner, placed in the world by its toWorld (returns 1).
+  float parseDensityVolume(const pugi::xml_node& node, MediumDescription* m) {
+    const std::string type = node.attribute("type").as_string();
+    if (type == "constvolume") {
+      const Spectrum v = constantVolume(node, "density");
+      if (v.x != v.y || v.x != v.z) fail(node, "a density must be a single number");
+      m->type = MediumDescription::Type::Homogeneous;
+      return v.x;
+    }
+    m->type = MediumDescription::Type::Grid;
+    if (type != "gridvolume")
+      fail(node, "unknown or unsupported volume type '" + type + "' (gridvolume, constvolume)");
+    PropertySet props = collectProperties(node, nullptr);
+    pugi::xml_node fileNode;
+    const std::string filename = getString(props, "filename", "", &fileNode);
+    if (!fileNode || trim(filename).empty()) fail(node, "a gridvolume needs a filename");
+    Matrix4 toWorld = Matrix4::identity();
+    if (pugi::xml_node t = props.take("toWorld")) toWorld = transformOf(t);
+    if (pugi::xml_node n = props.take("sendData")) (void)n;  // a network-rendering switch
+    rejectUnused(props, "volume type 'gridvolume'");
+    const std::string bytes =
+        readSceneFile(sceneFilePath(dir_, filename, "volume file", path_, lineOf(fileNode)),
+                      "volume file", path_, lineOf(fileNode));
+    GridVolume volume;
+    std::string problem;
+    if (!decodeGridVolume(bytes, &volume, &problem)) fail(fileNode, filename + ": " + problem);
+    m->nx = volume.nx, m->ny = volume.ny, m->nz = volume.nz;
+    m->density = std::move(volume.values);
+    m->cellCentred = false;
+    const Vec3f extent = volume.boundsMax - volume.boundsMin;
+    const Matrix4 worldToVolume = toWorld.inverse();
+    if (!worldToVolume.isFinite()) fail(node, "the gridvolume's toWorld is singular");
+    m->worldToGrid = Matrix4::scale(Vec3f(1 / extent.x, 1 / extent.y, 1 / extent.z)) *
+                     Matrix4::translate(-volume.boundsMin) * worldToVolume;
+    return 1;
+  }
+
   void parseShape(const pugi::xml_node& node) {
     std::string type = node.attribute("type").as_string();
     if (type != "rectangle" && type != "cube" && type != "sphere" && type != "obj" &&
@@ -1070,7 +1218,14 @@ class MitsubaLoader {
     pugi::xml_node emitterNode;
     for (const pugi::xml_node& child : nested) {
       std::string_view tag = child.name();
-      if (tag == "bsdf" || tag == "ref") {
+      const std::string_view name = child.attribute("name").value();
+      if ((tag == "medium" || tag == "ref") && (name == "interior" || name == "exterior")) {
+        // The media on either side: <medium name="interior" ...> or <ref name="interior" .../>.
+        int& side = name == "interior" ? shape.interiorMedium : shape.exteriorMedium;
+        if (side >= 0) fail(child, "shape has more than one " + std::string(name) + " medium");
+        side = tag == "ref" ? resolveRef(child, "medium") : parseMedium(child);
+        shape.hasMediumInterface = true;
+      } else if (tag == "bsdf" || tag == "ref") {
         if (bsdf >= 0) fail(child, "shape has more than one bsdf");
         if (tag == "ref") {
           bsdf = resolveBsdfRef(child);
@@ -1089,7 +1244,12 @@ class MitsubaLoader {
         failUnknownElement(child);
       }
     }
-    if (bsdf < 0) {
+    if (bsdf < 0 && shape.hasMediumInterface) {
+      // Mitsuba's medium transition: a shape with media and no BSDF only bounds them.
+      if (shape.isEmitter)
+        fail(node, "an emitting shape that bounds a medium needs a BSDF (its surface scatters)");
+      shape.nullBoundary = true;
+    } else if (bsdf < 0) {
       // Mitsuba gives a shape without a material a diffuse one of reflectance 0.5.
       BsdfDescription def;
       def.type = BsdfDescription::Type::Diffuse;
@@ -1097,7 +1257,7 @@ class MitsubaLoader {
       bsdf = addBsdf(def);
     }
     shape.bsdf = bsdf;
-    const bool textured = scene_.bsdfs[size_t(bsdf)].reflectanceTexture >= 0;
+    const bool textured = bsdf >= 0 && scene_.bsdfs[size_t(bsdf)].reflectanceTexture >= 0;
     if (textured && (type == "sphere" || type == "cube"))
       fail(node, "a textured " + type +
                      " is not supported (texture coordinates come from meshes "

@@ -13,6 +13,7 @@
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/loaders/pbrt_tokenizer.h"
 #include "common/scene/loaders/ply_reader.h"
+#include "common/scene/medium.h"
 
 namespace farm {
 
@@ -103,11 +104,19 @@ struct AreaLight {
   bool twoSided = false;
 };
 
+// Material "" (pbrt-v3's no material, "none") and "interface" (pbrt-v4): a surface that only
+// bounds media.
+constexpr int kInterfaceMaterial = -2;
+
 struct Attributes {
   Matrix4 ctm = Matrix4::identity();
   bool reverseOrientation = false;
-  int material = -1;  // bsdf index; -1: pbrt's default (diffuse 0.5), made on first use
+  // bsdf index; -1: pbrt's default (diffuse 0.5), made on first use; kInterfaceMaterial
+  int material = -1;
   AreaLight areaLight;
+  // MediumInterface's named media ("" for vacuum), resolved where a shape or the camera uses
+  // them, as pbrt does.
+  std::string insideMedium, outsideMedium;
 };
 
 // A texture as its definition made it: built there (as pbrt does, so that it can name only
@@ -150,6 +159,13 @@ class PbrtLoader {
       throw SceneLoadError(path_, 0, "AttributeBegin without AttributeEnd at the end of the file");
     if (inObject_) throw SceneLoadError(path_, 0, "ObjectBegin without ObjectEnd");
     if (!sawCamera_) throw SceneLoadError(path_, 0, "no Camera directive");
+    if (!cameraMedium_.empty()) {
+      auto it = namedMedia_.find(cameraMedium_);
+      if (it == namedMedia_.end())
+        throw SceneLoadError(cameraDirectiveFile_, cameraDirectiveLine_,
+                             "the camera's medium '" + cameraMedium_ + "' is not defined");
+      scene_.camera.medium = it->second;
+    }
     if (scene_.shapes.empty()) throw SceneLoadError(path_, 0, "the scene has no shapes");
     return std::move(scene_);
   }
@@ -490,8 +506,15 @@ class PbrtLoader {
     } else if (n == "LightSource") {
       inWorld(d);
       parseLightSource(d);
-    } else if (n == "MakeNamedMedium" || n == "MediumInterface") {
-      fail(d, n + ": participating media are not supported");
+    } else if (n == "MakeNamedMedium") {
+      if (namedMedia_.count(d.strings[0]))
+        fail(d, "medium '" + d.strings[0] + "' is defined twice");
+      namedMedia_[d.strings[0]] = makeMedium(d);
+    } else if (n == "MediumInterface") {
+      // One name: the same medium on both sides; two: inside, then outside.
+      if (d.strings.empty()) fail(d, "MediumInterface names one or two media");
+      attrs_.insideMedium = d.strings[0];
+      attrs_.outsideMedium = d.strings.size() > 1 ? d.strings[1] : d.strings[0];
     } else if (n == "ObjectBegin") {
       inWorld(d);
       if (inObject_) fail(d, "ObjectBegin inside the definition of object '" + objectName_ + "'");
@@ -612,6 +635,10 @@ class PbrtLoader {
   void parseCamera(Directive& d) {
     if (sawCamera_) fail(d, "a second Camera");
     sawCamera_ = true;
+    // pbrt: the camera sits in the current outside medium.
+    cameraMedium_ = attrs_.outsideMedium;
+    cameraDirectiveFile_ = d.file;
+    cameraDirectiveLine_ = d.line;
     if (d.strings[0] != "perspective")
       fail(d, "camera '" + d.strings[0] + "' is not supported (perspective only)");
     double fov = getFloat(d, "fov", 90);
@@ -960,6 +987,11 @@ class PbrtLoader {
   }
 
   int makeMaterial(Directive& d, const std::string& type) {
+    if (type == "" || type == "none" || type == "interface") {
+      getString(d, "type", "");  // MakeNamedMaterial's, read already
+      rejectUnused(d, "material '" + type + "'");
+      return kInterfaceMaterial;
+    }
     if (type == "diffuse" || type == "conductor" || type == "dielectric" || type == "coateddiffuse")
       sawV4_ = true;
     const std::string what = "material '" + type + "'";
@@ -1085,7 +1117,7 @@ class PbrtLoader {
   }
 
   int currentMaterial() {
-    if (attrs_.material < 0) {
+    if (attrs_.material == -1) {
       if (defaultMaterial_ < 0) {
         BsdfDescription b;
         b.type = BsdfDescription::Type::Diffuse;
@@ -1191,6 +1223,71 @@ class PbrtLoader {
 
   // ---- Shapes ----
 
+  // ---- Media ----
+
+  int mediumNamed(const Directive& d, const std::string& name) {
+    if (name.empty()) return -1;
+    auto it = namedMedia_.find(name);
+    if (it == namedMedia_.end()) fail(d, "medium '" + name + "' is not defined");
+    return it->second;
+  }
+
+  // MakeNamedMedium: "homogeneous", or a density grid (pbrt-v3's "heterogeneous", pbrt-v4's
+  // "uniformgrid": "density" with x fastest over nx * ny * nz values at cell centres, spanning
+  // p0 to p1 in the space of the current transformation). sigma_a and sigma_s are required:
+  // pbrt-v3 and v4 default them differently.
+  int makeMedium(Directive& d) {
+    const std::string type = getString(d, "type", "");
+    const std::string what = "medium '" + d.strings[0] + "' of type '" + type + "'";
+    if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid")
+      fail(d, type.empty() ? "MakeNamedMedium '" + d.strings[0] + "' has no \"string type\""
+                           : what + " is not supported (homogeneous, heterogeneous, uniformgrid)");
+    if (type == "uniformgrid") sawV4_ = true;
+    if (d.params.has("preset"))
+      failParam(d, *d.params.find("preset"),
+                what +
+                    ": named presets (measured coefficients) are not supported: give "
+                    "sigma_a and sigma_s");
+    for (const char* emission : {"Le", "Lescale", "temperature", "temperaturescale"})
+      if (d.params.has(emission))
+        failParam(d, *d.params.find(emission), what + ": emitting media are not supported");
+    MediumDescription m;
+    m.id = d.strings[0];
+    m.origin = fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type +
+               " '" + d.strings[0] + "')";
+    if (!getSpectrum(d, "sigma_a", &m.sigmaA) || !getSpectrum(d, "sigma_s", &m.sigmaS))
+      fail(d, what +
+                  " needs \"rgb sigma_a\" and \"rgb sigma_s\" (pbrt-v3 and v4 default "
+                  "them differently)");
+    const double scale = getFloat(d, "scale", 1);
+    if (!(scale >= 0) || !std::isfinite(scale)) fail(d, what + ": scale must be >= 0");
+    m.sigmaA *= float(scale);
+    m.sigmaS *= float(scale);
+    m.g = float(getFloat(d, "g", 0));
+    if (type != "homogeneous") {
+      m.type = MediumDescription::Type::Grid;
+      const long long nx = getInt(d, "nx", 1), ny = getInt(d, "ny", 1), nz = getInt(d, "nz", 1);
+      if (nx < 1 || ny < 1 || nz < 1 || nx * ny > (1ll << 28) / nz)
+        fail(d, what + ": nx, ny and nz must be >= 1 and their product at most 2^28");
+      m.nx = int(nx), m.ny = int(ny), m.nz = int(nz);
+      const std::vector<double> density = getNumbers(d, "density", {"float"}, 1);
+      if (density.size() != size_t(nx * ny * nz))
+        fail(d, what + ": \"float density\" has " + std::to_string(density.size()) +
+                    " values for nx * ny * nz = " + std::to_string(nx * ny * nz));
+      m.density.assign(density.begin(), density.end());
+      const Vec3f p0 = getPoint(d, "p0", Vec3f(0.0f)), p1 = getPoint(d, "p1", Vec3f(1.0f));
+      const Matrix4 gridToWorld = attrs_.ctm * Matrix4::translate(p0) * Matrix4::scale(p1 - p0);
+      m.worldToGrid = gridToWorld.inverse();
+      if (!m.worldToGrid.isFinite()) fail(d, what + ": the box from p0 to p1 is empty");
+      m.cellCentred = true;
+    }
+    rejectUnused(d, what);
+    const std::string problem = mediumProblem(m);
+    if (!problem.empty()) fail(d, what + ": " + problem);
+    scene_.media.push_back(std::move(m));
+    return int(scene_.media.size()) - 1;
+  }
+
   void parseShape(Directive& d) {
     const std::string& type = d.strings[0];
     const std::string what = "shape '" + type + "'";
@@ -1206,6 +1303,17 @@ class PbrtLoader {
       shape.radiance = attrs_.areaLight.radiance;
       shape.emitsBothSides = attrs_.areaLight.twoSided;
     }
+    if (shape.bsdf == kInterfaceMaterial) {
+      if (shape.isEmitter) fail(d, what + ": an area light on an interface material");
+      shape.nullBoundary = true;
+      shape.bsdf = -1;
+    }
+    // pbrt: a shape changes the medium only where its two sides differ.
+    if (attrs_.insideMedium != attrs_.outsideMedium) {
+      shape.hasMediumInterface = true;
+      shape.interiorMedium = mediumNamed(d, attrs_.insideMedium);
+      shape.exteriorMedium = mediumNamed(d, attrs_.outsideMedium);
+    }
     shape.origin =
         fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type;
     const Matrix4& toWorld = attrs_.ctm;
@@ -1214,7 +1322,8 @@ class PbrtLoader {
     // world space) round for ReverseOrientation and for a mirroring transform; with them the
     // geometric normal follows the shading normal and neither applies.
     const bool flipWithoutNormals = attrs_.reverseOrientation != swaps;
-    const bool textured = scene_.bsdfs[size_t(shape.bsdf)].reflectanceTexture >= 0;
+    const bool textured =
+        shape.bsdf >= 0 && scene_.bsdfs[size_t(shape.bsdf)].reflectanceTexture >= 0;
 
     if (type == "trianglemesh" || type == "bilinearmesh") {
       const bool bilinear = type == "bilinearmesh";
@@ -1452,6 +1561,9 @@ class PbrtLoader {
   std::vector<Matrix4> transformStack_;
   std::map<std::string, Matrix4> namedCoordinateSystems_;
   std::map<std::string, int> namedMaterials_;
+  std::map<std::string, int> namedMedia_;
+  std::string cameraMedium_, cameraDirectiveFile_;
+  int cameraDirectiveLine_ = 0;
   std::map<std::string, NamedTexture> spectrumTextures_, floatTextures_;
   TextureImageCache images_;
   std::vector<int> textureDepth_;  // per texture: 1 + its deepest child's
