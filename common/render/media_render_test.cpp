@@ -1,7 +1,7 @@
 // Participating media through the whole render: the smoky room of tests/data (fog, tinted water
-// in glass, a puff of smoke from a grid file) loads, and path tracing and PSSMLT over it agree
-// on it within their variance; every algorithm that does not track media yet refuses it with a
-// message that names the ones that do.
+// in glass, a puff of smoke from a grid file) loads, and path tracing, BDPT and the
+// primary-sample-space chains over them agree on it within their variance; the algorithms that
+// do not track media yet refuse it with a message that names the ones that do.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -34,27 +34,42 @@ Image renderSmokyBox(Algorithm algorithm, int64_t budget, uint64_t seed, double*
   return r.image;
 }
 
-TEST(MediaRender, PssmltOverPathTracingAgreesWithPathTracing) {
+// Each algorithm that tracks media against path tracing, both twice with different seeds.
+void expectAgreesWithPathTracing(Algorithm algorithm, int64_t budget) {
   Image pt[2] = {renderSmokyBox(Algorithm::PathTracing, 256, 1),
                  renderSmokyBox(Algorithm::PathTracing, 256, 2)};
-  double z[2];
-  Image chain[2] = {renderSmokyBox(Algorithm::PSSMLTOverPT, 256, 3, &z[0]),
-                    renderSmokyBox(Algorithm::PSSMLTOverPT, 256, 4, &z[1])};
-  const Agreement g = compare(pt, chain, 0.5 * std::hypot(z[0], z[1]));
+  double z[2] = {0, 0};
+  Image other[2] = {renderSmokyBox(algorithm, budget, 3, &z[0]),
+                    renderSmokyBox(algorithm, budget, 4, &z[1])};
+  const double zRel = isMarkovChain(algorithm) ? 0.5 * std::hypot(z[0], z[1]) : 0.0;
+  const Agreement g = compare(pt, other, zRel);
   EXPECT_GT(g.meanA, 0.01);
-  EXPECT_NEAR(g.meanA, g.meanB, 4 * g.se);
-  EXPECT_LT(g.ratio, 1.5);
+  EXPECT_NEAR(g.meanA, g.meanB, 4 * g.se) << algorithmName(algorithm);
+  EXPECT_LT(g.ratio, 1.5) << algorithmName(algorithm);
   std::printf(
-      "smoky box: means pt %.4f pssmlt-pt %.4f (se %.4f), squared differences over "
-      "variance %.3f\n",
-      g.meanA, g.meanB, g.se, g.ratio);
+      "smoky box: means pt %.4f %s %.4f (se %.4f), squared differences over variance "
+      "%.3f\n",
+      g.meanA, algorithmName(algorithm), g.meanB, g.se, g.ratio);
+}
+
+TEST(MediaRender, BidirectionalAgreesWithPathTracing) {
+  expectAgreesWithPathTracing(Algorithm::Bidirectional, 64);
+}
+TEST(MediaRender, PssmltOverPathTracingAgreesWithPathTracing) {
+  expectAgreesWithPathTracing(Algorithm::PSSMLTOverPT, 256);
+}
+TEST(MediaRender, PssmltAgreesWithPathTracing) {
+  expectAgreesWithPathTracing(Algorithm::PSSMLT, 128);
+}
+TEST(MediaRender, MultiplexedAgreesWithPathTracing) {
+  expectAgreesWithPathTracing(Algorithm::MMLT, 128);
 }
 
 TEST(MediaRender, AlgorithmsThatDoNotTrackMediaRefuseThem) {
   for (Algorithm algorithm : allAlgorithms()) {
     RenderSettings settings;
     settings.algorithm = algorithm;
-    if (algorithm == Algorithm::PathTracing || algorithm == Algorithm::PSSMLTOverPT) {
+    if (algorithm != Algorithm::MLT && algorithm != Algorithm::ERPT) {
       EXPECT_TRUE(loadScene(kSmokyBox, settings)->hasMedia());
       continue;
     }
@@ -62,10 +77,10 @@ TEST(MediaRender, AlgorithmsThatDoNotTrackMediaRefuseThem) {
       loadScene(kSmokyBox, settings);
       ADD_FAILURE() << algorithmName(algorithm) << " accepted a scene with media";
     } catch (const SceneLoadError& e) {
-      EXPECT_NE(
-          std::string(e.what()).find(std::string("participating media are not supported by ") +
-                                     algorithmName(algorithm) + " yet: use pt or pssmlt-pt"),
-          std::string::npos)
+      EXPECT_NE(std::string(e.what()).find(
+                    std::string("participating media are not supported by ") +
+                    algorithmName(algorithm) + " yet: use pt, bdpt, pssmlt, pssmlt-pt or mmlt"),
+                std::string::npos)
           << e.what();
     }
   }

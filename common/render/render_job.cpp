@@ -345,15 +345,16 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
                              " yet (its mutations build paths from lights at finite points "
                              "only): use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
   }
-  // Participating media: path tracing tracks them (and PSSMLT over it, which draws the same
-  // paths); the bidirectional and path-space algorithms do not yet.
+  // Participating media: path tracing and BDPT track them (and the primary-sample-space chains
+  // over them, which draw the same paths); path-space MLT and ERPT, whose paths have no medium
+  // vertices yet, do not.
   bool media = !desc.media.empty();
   for (const ShapeDescription& s : desc.shapes) media = media || s.nullBoundary;
-  if (media && settings.algorithm != Algorithm::PathTracing &&
-      settings.algorithm != Algorithm::PSSMLTOverPT) {
+  if (media && (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
     throw SceneLoadError(path, 0,
                          std::string("participating media are not supported by ") +
-                             algorithmName(settings.algorithm) + " yet: use pt or pssmlt-pt");
+                             algorithmName(settings.algorithm) +
+                             " yet: use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
   }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);

@@ -14,10 +14,10 @@
 #include "common/render/image_agreement.h"
 #include "common/render/local_render.h"
 #include "common/sampling/rng.h"
+#include "common/sampling/sampler.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/scene.h"
 #include "common/transport/bidirectional.h"
-#include "common/sampling/sampler.h"
 
 namespace farm {
 namespace {

@@ -435,18 +435,40 @@ int Scene::mediumOnSide(int shape, const Vec3f& ng, const Vec3f& w, int current)
   return dot(w, ng) > 0 ? s.exteriorMedium : s.interiorMedium;
 }
 
-Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, const Vec3f& d, const Vec3f* end,
+int Scene::mediumAt(const Vec3f& p) const {
+  if (!tracksMedia_) return -1;
+  // A direction along no axis, so that the ray does not run along the edges of boxes.
+  const Vec3f d = normalize(Vec3f(0.5477f, 0.6412f, 0.5373f));
+  Ray r{p, d, kInfinity};
+  for (int crossing = 0; crossing < 1024; ++crossing) {
+    SurfaceHit hit;
+    if (!intersect(r, &hit)) return -1;
+    const ShapeDescription& s = desc_.shapes[size_t(hit.shape)];
+    if (s.hasMediumInterface) return dot(d, hit.ng) > 0 ? s.interiorMedium : s.exteriorMedium;
+    r = spawnRay(hit.p, hit.ng, d);
+  }
+  return -1;
+}
+
+Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end,
                                    const Vec3f* rayEnd, int medium, Sampler& sampler,
                                    SampleStream stream) const {
   Spectrum T(1.0f);
   // Each pass crosses one null boundary; a cap keeps a degenerate stack of them finite. The
-  // rays start off the surfaces (o, rayEnd); the media count from the surfaces themselves
-  // (start, end), or a crossing would skip the offset's length of each medium.
+  // rays start off the surfaces (o, rayEnd) and aim at rayEnd itself, as visible()'s does: a
+  // ray along the unoffset points' direction would pass an offset's width beside rayEnd and
+  // could clip the end's own surface. The media count from the surfaces themselves (start,
+  // end), or a crossing would skip the offset's length of each medium.
   for (int crossing = 0; crossing < 1024; ++crossing) {
-    Ray r{o, d, rayEnd ? dot(*rayEnd - o, d) : kInfinity};
-    if (!(r.tMax > 0)) r.tMax = 0;
+    Ray r{o, d, kInfinity};
+    if (rayEnd) {
+      const Vec3f toEnd = *rayEnd - o;
+      r.tMax = farm::length(toEnd);
+      if (!(r.tMax > 0)) return T;
+      r.d = d = toEnd / r.tMax;
+    }
     SurfaceHit hit;
-    const bool found = r.tMax > 0 && intersect(r, &hit);
+    const bool found = intersect(r, &hit);
     if (medium >= 0) {
       const float length =
           found ? farm::length(hit.p - start) : (end ? farm::length(*end - start) : kInfinity);
@@ -469,9 +491,8 @@ Spectrum Scene::transmittance(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1,
   Vec3f o = p0, e = p1;
   if (lengthSquared(n0) > 0) o = p0 + n0 * ((dot(n0, d) >= 0 ? 1.0f : -1.0f) * offsetFor(p0));
   if (lengthSquared(n1) > 0) e = p1 + n1 * ((dot(n1, d) <= 0 ? 1.0f : -1.0f) * offsetFor(p1));
-  const float length = farm::length(d);
-  if (!(length > 0)) return Spectrum(1.0f);
-  return transmittanceAlong(p0, o, d / length, &p1, &e, medium, sampler, stream);
+  if (!(lengthSquared(d) > 0)) return Spectrum(1.0f);
+  return transmittanceAlong(p0, o, normalize(d), &p1, &e, medium, sampler, stream);
 }
 
 Spectrum Scene::transmittanceToInfinity(const Vec3f& p, const Vec3f& n, const Vec3f& w, int medium,

@@ -161,6 +161,10 @@ class Scene {
   // to, for a ray that was in `current`: the shape's exterior or interior medium when it has a
   // medium interface, else `current` (a surface without one leaves the medium as it is).
   int mediumOnSide(int shape, const Vec3f& ng, const Vec3f& w, int current) const;
+  // The medium at point p, for where nothing says it (a light on a shape without a medium
+  // interface): the side of the first medium boundary a ray from p meets that faces p, or
+  // vacuum when the ray meets none.
+  int mediumAt(const Vec3f& p) const;
   // The transmittance between two points (n = 0 for a point in a medium or on the camera),
   // starting in `medium` (-1: vacuum): 0 when a surface other than a null boundary blocks the
   // segment; the media crossed change at each null boundary. An unbiased estimate with numbers
@@ -174,9 +178,8 @@ class Scene {
  private:
   // transmittance()'s walk along unit d from surface point `start` (its ray from o, offset off
   // the surface) to `end` (its ray to rayEnd), or to infinity when they are null.
-  Spectrum transmittanceAlong(Vec3f start, Vec3f o, const Vec3f& d, const Vec3f* end,
-                              const Vec3f* rayEnd, int medium, Sampler& sampler,
-                              SampleStream stream) const;
+  Spectrum transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end, const Vec3f* rayEnd,
+                              int medium, Sampler& sampler, SampleStream stream) const;
 
   float offsetFor(const Vec3f& p) const;
 

@@ -7,7 +7,10 @@
 
 #include <cmath>
 
+#include "common/sampling/rng.h"
+#include "common/sampling/warp.h"
 #include "common/scene/stiff_scenes.h"
+#include "common/scene/test_scenes.h"
 
 namespace farm {
 namespace {
@@ -47,6 +50,68 @@ TEST(LightSampling, ProbabilitiesAreTheDensitiesOnes) {
   }
   EXPECT_NEAR(pickSum, 1.0, 1e-9);
   EXPECT_LT(minShare, 1e-8);  // the test covers shares below float's resolution
+}
+
+// A room (walls facing in) with a ball, seen through a box of clear medium (sigma 0) that
+// only null boundaries bound, or with no box: between any two wall points the transmittance
+// through the box must be the visibility without it. The box's faces cross most segments; a
+// ray that did not aim at the offset end point itself would clip the end's own wall.
+TEST(Scene, TransmittanceThroughClearMediaIsVisibility) {
+  SceneDescription room;
+  BsdfDescription white;
+  room.bsdfs.push_back(white);
+  const Vec3f lo(-1, 0, -3.5f), hi(1, 2, 1);
+  const Vec3f e = hi - lo, x(e.x, 0, 0), y(0, e.y, 0), z(0, 0, e.z);
+  // Inward normals: each face's edges in the opposite order to an outward box's.
+  room.shapes.push_back(quadShape(lo, x, y, 0));                       // -z face
+  room.shapes.push_back(quadShape(Vec3f(lo.x, lo.y, hi.z), y, x, 0));  // +z
+  room.shapes.push_back(quadShape(lo, z, x, 0));                       // floor
+  room.shapes.push_back(quadShape(Vec3f(lo.x, hi.y, lo.z), x, z, 0));  // ceiling
+  room.shapes.push_back(quadShape(lo, y, z, 0));                       // -x
+  room.shapes.push_back(quadShape(Vec3f(hi.x, lo.y, lo.z), z, y, 0));  // +x
+  room.shapes.push_back(sphereShape(Vec3f(-0.4f, 0.26f, -0.1f), 0.25f, 0));
+  SceneDescription withBox = room;
+  withBox.media.push_back(MediumDescription{});  // sigma_a = sigma_s = 0
+  const Vec3f blo(-0.98f, 0.01f, -1.0f), bhi(0.98f, 1.0f, 0.98f);
+  const Vec3f be = bhi - blo, bx(be.x, 0, 0), by(0, be.y, 0), bz(0, 0, be.z);
+  const ShapeDescription faces[6] = {
+      quadShape(blo, by, bx, -1), quadShape(Vec3f(blo.x, blo.y, bhi.z), bx, by, -1),
+      quadShape(blo, bx, bz, -1), quadShape(Vec3f(blo.x, bhi.y, blo.z), bz, bx, -1),
+      quadShape(blo, bz, by, -1), quadShape(Vec3f(bhi.x, blo.y, blo.z), by, bz, -1)};
+  for (ShapeDescription f : faces) {
+    f.hasMediumInterface = true;
+    f.interiorMedium = 0;
+    f.nullBoundary = true;
+    withBox.shapes.push_back(f);
+  }
+  const Scene plain(room), boxed(withBox);
+  ASSERT_TRUE(boxed.hasMedia());
+  Rng rng(5, 5);
+  IndependentSampler sampler(&rng);
+  auto wallPoint = [&](SurfaceHit* h) {
+    for (;;) {
+      Ray r;
+      r.o = Vec3f(rng.nextFloat() * 1.6f - 0.8f, 0.05f + rng.nextFloat() * 1.8f,
+                  -2 + 2.5f * rng.nextFloat());
+      r.d = squareToUniformSphere({rng.nextFloat(), rng.nextFloat()});
+      if (plain.intersect(r, h)) return;
+    }
+  };
+  int visibleCount = 0, mismatches = 0;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    SurfaceHit a, b;
+    wallPoint(&a);
+    wallPoint(&b);
+    // Points on one plane see each other only at grazing angles, where it does not matter.
+    if (std::fabs(dot(a.ng, b.ng)) > 0.999f && std::fabs(dot(b.p - a.p, a.ng)) < 1e-4f) continue;
+    const bool visible = plain.visible(a.p, a.ng, b.p, b.ng);
+    const Spectrum T = boxed.transmittance(a.p, a.ng, b.p, b.ng, -1, sampler, kCameraStream);
+    visibleCount += visible;
+    if (visible != (T.x == 1 && T.y == 1 && T.z == 1) || (!visible && !isBlack(T))) ++mismatches;
+  }
+  EXPECT_GT(visibleCount, n / 2);
+  EXPECT_EQ(mismatches, 0);
 }
 
 }  // namespace

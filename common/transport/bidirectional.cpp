@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "common/sampling/warp.h"
+#include "common/transport/medium_tracking.h"
 #include "common/transport/path_tracer.h"
 
 namespace farm {
@@ -22,27 +23,68 @@ Vec3f directionTo(const Vec3f& from, const Vec3f& to) {
 }
 
 // |cos| at the light subpath's end y towards w: geometric on an emitter (s == 1), otherwise the
-// shading cosine times the adjoint correction, |w.ng| |wo.ns| / |wo.ng|.
+// shading cosine times the adjoint correction, |w.ng| |wo.ns| / |wo.ng|; none in a medium.
 float lightEndCosine(const PathVertex& y, const Vec3f& w, int s) {
+  if (inMedium(y)) return 1;
   if (s == 1) return absDot(y.n, w);
   return absDot(w, y.ns) * shadingCorrection(y.wo, w, y.n, y.ns);
 }
 
 }  // namespace
 
+int BidirectionalTracer::mediumToward(const PathVertex& v, const Vec3f& w) const {
+  if (v.shape < 0 || inMedium(v)) return v.medium;
+  return scene_.mediumOnSide(v.shape, v.n, w, v.medium);
+}
+
+Spectrum BidirectionalTracer::scatterValue(const PathVertex& v, const Vec3f& w,
+                                           TransportMode mode) const {
+  if (inMedium(v)) return Spectrum(scene_.medium(v.medium).phase().eval(v.wo, w));
+  if (!sidesAgree(w, v.n, v.ns)) return Spectrum(0.0f);
+  const Frame frame(v.ns);
+  return scene_.bsdfAt(v.shape, v.uv).eval(frame.toLocal(v.wo), frame.toLocal(w), mode);
+}
+
+float BidirectionalTracer::scatterDensity(const PathVertex& v, const Vec3f& wFrom,
+                                          const Vec3f& wTo) const {
+  if (inMedium(v)) return scene_.medium(v.medium).phase().eval(wFrom, wTo);
+  const Frame frame(v.ns);
+  return scene_.bsdfAt(v.shape, v.uv).pdf(frame.toLocal(wFrom), frame.toLocal(wTo));
+}
+
+Spectrum BidirectionalTracer::unblocked(const PathVertex& a, const PathVertex& b,
+                                        Sampler& sampler) const {
+  ++rays_;
+  if (!scene_.hasMedia())
+    return scene_.visible(a.p, a.n, b.p, b.n) ? Spectrum(1.0f) : Spectrum(0.0f);
+  return scene_.transmittance(a.p, a.n, b.p, b.n, mediumToward(a, directionBetween(a, b)), sampler,
+                              kCameraStream);
+}
+
 BidirectionalTracer::BidirectionalTracer(const Scene& scene, int maxDepth, MisHeuristic heuristic)
     : scene_(scene), maxDepth_(maxDepth < 0 ? kUnboundedDepth : maxDepth), heuristic_(heuristic) {}
 
-int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sampler& sampler,
-                                    SampleStream stream, TransportMode mode, int maxVertices,
-                                    bool roulette, PathVertex* path) const {
+int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, int medium,
+                                    Sampler& sampler, SampleStream stream, TransportMode mode,
+                                    int maxVertices, bool roulette, PathVertex* path) const {
   int count = 1;  // path[0] is the endpoint
+  // Where the ray's segment through its medium begins: the surface point, not the ray's origin
+  // offset off it (see PathTracer::walk).
+  Vec3f mediumStart = ray.o;
   while (count < maxVertices) {
+    // The next vertex: a surface other than a null boundary, or a scattering event in the
+    // medium before it.
     SurfaceHit hit;
-    ++rays_;
+    const MediumStep step =
+        traceThroughMedia(scene_, &ray, &medium, &mediumStart, sampler, stream, &hit, &rays_);
+    const bool found = step.foundSurface;
+    const MediumInteraction& event = step.event;
+    const Spectrum& segmentWeight = step.weight;
+    beta *= segmentWeight;
+    if (isBlack(beta)) break;
     PathVertex& v = path[count];
     PathVertex& prev = path[count - 1];
-    if (!scene_.intersect(ray, &hit)) {
+    if (!event.scattered && !found) {
       // A camera subpath that leaves the scene ends on the environment, at infinity: its
       // density there is the direction's.
       const int environment = scene_.environmentLight();
@@ -54,54 +96,69 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, Sample
       }
       break;
     }
-    v = PathVertex();
-    v.kind = PathVertex::Kind::Surface;
-    v.p = hit.p;
-    v.n = hit.ng;
-    v.ns = hit.ns;
-    v.uv = hit.uv;
+    if (event.scattered) {
+      v = PathVertex();
+      v.kind = PathVertex::Kind::Medium;
+      v.p = mediumStart + ray.d * event.t;
+    } else {
+      v = surfaceVertex(scene_, hit);
+    }
     v.wo = -ray.d;
-    v.shape = hit.shape;
-    v.primitive = int(hit.primitive);
-    v.light = scene_.lightOf(hit.shape);
     v.beta = beta;
+    v.medium = medium;
     // After the environment, pdfDir is the density of the disk the ray left (in the plane
     // normal to its direction): projected onto the surface by its cosine.
-    v.pdfFwd = atInfinity(prev) ? pdfDir * absDot(v.n, prev.n) : toAreaDensity(pdfDir, prev.p, v);
+    v.pdfFwd = atInfinity(prev) ? pdfDir * cosineAt(v, prev.n) : toAreaDensity(pdfDir, prev.p, v);
     ++count;
     if (count >= maxVertices) break;
 
-    const Bsdf& bsdf = scene_.bsdfAt(hit.shape, hit.uv);
     float u[3] = {sampler.next(stream), sampler.next(stream), sampler.next(stream)};
     float uRoulette = sampler.next(stream);
-    if (bsdf.isBlack() || !sidesAgree(v.wo, v.n, v.ns)) break;
-    Frame frame(v.ns);
-    Vec3f wo = frame.toLocal(v.wo);
-    BsdfSample bs;
-    if (!bsdf.sample(wo, u, mode, &bs)) break;
-    Vec3f wi = frame.toWorld(bs.wi);
-    if (!sidesAgree(wi, v.n, v.ns)) break;
+    Vec3f wi;
     float pdfRev;
-    if (bs.delta) {
-      // Dirac lobes: densities are not comparable with other strategies; the MIS weights skip
-      // connections at this vertex and treat its densities as one (Veach 1997, 10.3.5).
-      v.delta = true;
-      pdfDir = 0;
-      pdfRev = 0;
+    Spectrum weight, rouletteScale(1.0f);
+    if (inMedium(v)) {
+      // The phase function, sampled exactly (weight one); it is symmetric, so the reverse
+      // density is the forward one.
+      wi = scene_.medium(medium).phase().sample(v.wo, {u[1], u[2]}, &pdfDir);
+      if (!(pdfDir > 0)) break;
+      pdfRev = pdfDir;
+      weight = Spectrum(1.0f);
+      mediumStart = v.p;
+      ray = Ray{v.p, wi};
     } else {
-      pdfDir = bs.pdf;
-      pdfRev = bsdf.pdf(bs.wi, wo);
+      const Bsdf& bsdf = scene_.bsdfAt(hit.shape, hit.uv);
+      if (bsdf.isBlack() || !sidesAgree(v.wo, v.n, v.ns)) break;
+      Frame frame(v.ns);
+      Vec3f wo = frame.toLocal(v.wo);
+      BsdfSample bs;
+      if (!bsdf.sample(wo, u, mode, &bs)) break;
+      wi = frame.toWorld(bs.wi);
+      if (!sidesAgree(wi, v.n, v.ns)) break;
+      if (bs.delta) {
+        // Dirac lobes: densities are not comparable with other strategies; the MIS weights skip
+        // connections at this vertex and treat its densities as one (Veach 1997, 10.3.5).
+        v.delta = true;
+        pdfDir = 0;
+        pdfRev = 0;
+      } else {
+        pdfDir = bs.pdf;
+        pdfRev = bsdf.pdf(bs.wi, wo);
+      }
+      weight = rouletteScale = bs.weight;
+      if (mode == TransportMode::Importance) weight *= shadingCorrection(v.wo, wi, v.n, v.ns);
+      medium = scene_.mediumOnSide(hit.shape, hit.ng, wi, medium);
+      mediumStart = v.p;
+      ray = scene_.spawnRay(v.p, v.n, wi);
     }
-    beta *= bs.weight;
-    if (mode == TransportMode::Importance) beta *= shadingCorrection(v.wo, wi, v.n, v.ns);
+    beta *= weight;
     prev.pdfRev = toAreaDensity(pdfRev, v.p, prev);
     if (roulette && count > kRussianRouletteDepth) {
-      float q = russianRouletteSurvival(maxComponent(bs.weight));
+      float q = russianRouletteSurvival(maxComponent(rouletteScale * segmentWeight));
       if (uRoulette >= q) break;
       beta /= q;
     }
     if (isBlack(beta) || !isFinite(beta)) break;
-    ray = scene_.spawnRay(v.p, v.n, wi);
   }
   return count;
 }
@@ -120,9 +177,10 @@ int BidirectionalTracer::traceCameraSubpath(const Vec2f& film, Sampler& sampler,
   c.kind = PathVertex::Kind::Camera;
   c.p = lens;
   c.beta = Spectrum(1.0f);  // We / pdf = 1: film points are sampled uniformly
+  c.medium = scene_.cameraMedium();
   float pdfDir = camera.importance(lens, ray.d);
-  return randomWalk(ray, Spectrum(1.0f), pdfDir, sampler, kCameraStream, TransportMode::Radiance,
-                    maxVertices, roulette, path);
+  return randomWalk(ray, Spectrum(1.0f), pdfDir, c.medium, sampler, kCameraStream,
+                    TransportMode::Radiance, maxVertices, roulette, path);
 }
 
 int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bool roulette,
@@ -158,7 +216,8 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
     Ray ray;
     ray.o = y.p;
     ray.d = -w;
-    return randomWalk(ray, y.beta / pdfDisk, pdfDisk, sampler, kLightStream,
+    // The scene's outside is vacuum.
+    return randomWalk(ray, y.beta / pdfDisk, pdfDisk, -1, sampler, kLightStream,
                       TransportMode::Importance, maxVertices, roulette, path);
   }
   if (light.isPoint()) {
@@ -169,6 +228,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
     y.kind = PathVertex::Kind::Light;
     y.p = point.position();
     y.light = l;
+    y.medium = scene_.mediumAt(y.p);
     y.pdfFwd = pickPdf;              // the coefficient of the position's delta
     y.beta = Spectrum(1 / pickPdf);  // the intensity, by direction, comes at each connection
     if (maxVertices < 2) return 1;
@@ -179,7 +239,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
     Ray ray;
     ray.o = y.p;
     ray.d = w;
-    return randomWalk(ray, beta, pdfDir, sampler, kLightStream, TransportMode::Importance,
+    return randomWalk(ray, beta, pdfDir, y.medium, sampler, kLightStream, TransportMode::Importance,
                       maxVertices, roulette, path);
   }
   Vec3f p, n;
@@ -192,6 +252,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   y.ns = n;
   y.shape = light.shape;
   y.light = l;
+  if (scene_.hasMedia()) y.medium = scene_.mediumAt(scene_.spawnRay(p, n, n).o);
   float pdfPos = pickPdf / light.area;
   y.pdfFwd = pdfPos;
   y.beta = light.radiance / pdfPos;
@@ -203,12 +264,12 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   Vec3f d = Frame(n).toWorld(local);
   Spectrum beta = y.beta * (std::fabs(local.z) / pdfDir);
   Ray ray = scene_.spawnRay(p, n, d);
-  return randomWalk(ray, beta, pdfDir, sampler, kLightStream, TransportMode::Importance,
-                    maxVertices, roulette, path);
+  return randomWalk(ray, beta, pdfDir, mediumToward(y, d), sampler, kLightStream,
+                    TransportMode::Importance, maxVertices, roulette, path);
 }
 
 Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVertex* cameraPath,
-                                      int s, int t, Vec2f* film) const {
+                                      int s, int t, Sampler& sampler, Vec2f* film) const {
   if (s == 0) {  // the camera subpath found a light by itself
     const PathVertex& z = cameraPath[t - 1];
     if (z.light < 0) return Spectrum(0.0f);
@@ -216,87 +277,80 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   }
   const PathVertex& y = lightPath[s - 1];
   if (y.delta) return Spectrum(0.0f);
+  // The camera subpath's end, when it can be connected: a non-Dirac surface or a medium vertex.
+  auto connectible = [](const PathVertex& z) {
+    return !z.delta && (z.kind == PathVertex::Kind::Surface || inMedium(z));
+  };
   if (onPointLight(y)) {                // s == 1: the light's position, if nothing blocks it
     if (t == 1) return Spectrum(0.0f);  // point lights are invisible
     const PathVertex& z = cameraPath[t - 1];
-    if (z.delta || z.kind != PathVertex::Kind::Surface) return Spectrum(0.0f);
+    if (!connectible(z)) return Spectrum(0.0f);
     const Vec3f d = y.p - z.p;
     const float d2 = lengthSquared(d);
     if (!(d2 > 0)) return Spectrum(0.0f);
     const Vec3f w = d / std::sqrt(d2);  // from z towards the light
-    if (!sidesAgree(w, z.n, z.ns)) return Spectrum(0.0f);
-    Frame fz(z.ns);
-    Spectrum f = scene_.bsdfAt(z.shape, z.uv)
-                     .eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance) *
-                 scene_.pointLight(y.light).intensity(-w);
+    Spectrum f =
+        scatterValue(z, w, TransportMode::Radiance) * scene_.pointLight(y.light).intensity(-w);
     if (isBlack(f)) return Spectrum(0.0f);
-    ++rays_;
-    if (!scene_.visible(z.p, z.n, y.p, Vec3f(0.0f))) return Spectrum(0.0f);
-    return z.beta * f * y.beta * (absDot(z.ns, w) / d2);
+    const Spectrum T = unblocked(z, y, sampler);
+    if (isBlack(T)) return Spectrum(0.0f);
+    return z.beta * f * y.beta * T * ((inMedium(z) ? 1.0f : absDot(z.ns, w)) / d2);
   }
   if (atInfinity(y)) {                  // s == 1: the environment's direction, if nothing blocks it
     if (t == 1) return Spectrum(0.0f);  // no direction of it reaches a point-like lens
     const PathVertex& z = cameraPath[t - 1];
-    if (z.delta || z.kind != PathVertex::Kind::Surface) return Spectrum(0.0f);
+    if (!connectible(z)) return Spectrum(0.0f);
     const Vec3f w = -y.n;  // from z towards the environment
-    if (!sidesAgree(w, z.n, z.ns)) return Spectrum(0.0f);
-    Frame fz(z.ns);
-    Spectrum f =
-        scene_.bsdfAt(z.shape, z.uv).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
+    Spectrum f = scatterValue(z, w, TransportMode::Radiance);
     if (isBlack(f)) return Spectrum(0.0f);
     ++rays_;
-    if (!scene_.escapes(z.p, z.n, w)) return Spectrum(0.0f);
-    return z.beta * f * y.beta * absDot(z.ns, w);
+    const Spectrum T = scene_.hasMedia()
+                           ? scene_.transmittanceToInfinity(z.p, z.n, w, mediumToward(z, w),
+                                                            sampler, kCameraStream)
+                           : Spectrum(scene_.escapes(z.p, z.n, w) ? 1.0f : 0.0f);
+    if (isBlack(T)) return Spectrum(0.0f);
+    return z.beta * f * y.beta * T * (inMedium(z) ? 1.0f : absDot(z.ns, w));
   }
   if (t == 1) {  // light tracing: connect to the camera (its lens point) and splat there
     const Camera& camera = scene_.camera();
-    const Vec3f& lens = cameraPath[0].p;
-    Vec3f toCamera = lens - y.p;
+    const PathVertex& lens = cameraPath[0];
+    Vec3f toCamera = lens.p - y.p;
     float d2 = lengthSquared(toCamera);
     if (!(d2 > 0)) return Spectrum(0.0f);
     Vec3f w = toCamera / std::sqrt(d2);
-    if (!camera.project(lens, -w, film)) return Spectrum(0.0f);
-    float We = camera.importance(lens, -w);
+    if (!camera.project(lens.p, -w, film)) return Spectrum(0.0f);
+    float We = camera.importance(lens.p, -w);
     Spectrum f;
     if (s == 1) {
       f = Spectrum(scene_.emissionPdf(y.light, y.n, w) > 0 ? 1.0f : 0.0f);  // its emitting side
     } else {
-      if (!sidesAgree(w, y.n, y.ns)) return Spectrum(0.0f);
-      Frame frame(y.ns);
-      f = scene_.bsdfAt(y.shape, y.uv)
-              .eval(frame.toLocal(y.wo), frame.toLocal(w), TransportMode::Importance);
+      f = scatterValue(y, w, TransportMode::Importance);
     }
     if (isBlack(f)) return Spectrum(0.0f);
-    ++rays_;
-    if (!scene_.visible(y.p, y.n, lens, Vec3f(0.0f))) return Spectrum(0.0f);
-    return y.beta * f * (We * lightEndCosine(y, w, s) / d2 * camera.pixelCount());
+    const Spectrum T = unblocked(y, lens, sampler);
+    if (isBlack(T)) return Spectrum(0.0f);
+    return y.beta * f * T * (We * lightEndCosine(y, w, s) / d2 * camera.pixelCount());
   }
   const PathVertex& z = cameraPath[t - 1];
-  if (z.delta || z.kind != PathVertex::Kind::Surface) return Spectrum(0.0f);
+  if (!connectible(z)) return Spectrum(0.0f);
   Vec3f d = y.p - z.p;
   float d2 = lengthSquared(d);
   if (!(d2 > 0)) return Spectrum(0.0f);
   Vec3f w = d / std::sqrt(d2);  // from z towards y
-  if (!sidesAgree(w, z.n, z.ns)) return Spectrum(0.0f);
-  Frame fz(z.ns);
-  Spectrum f =
-      scene_.bsdfAt(z.shape, z.uv).eval(fz.toLocal(z.wo), fz.toLocal(w), TransportMode::Radiance);
+  Spectrum f = scatterValue(z, w, TransportMode::Radiance);
   if (isBlack(f)) return Spectrum(0.0f);
   if (s == 1) {
     f *= scene_.emissionPdf(y.light, y.n, -w) > 0 ? 1.0f : 0.0f;  // its emitting side
   } else {
-    if (!sidesAgree(-w, y.n, y.ns)) return Spectrum(0.0f);
-    Frame fy(y.ns);
-    f *= scene_.bsdfAt(y.shape, y.uv)
-             .eval(fy.toLocal(y.wo), fy.toLocal(-w), TransportMode::Importance);
+    f *= scatterValue(y, -w, TransportMode::Importance);
   }
   if (isBlack(f)) return Spectrum(0.0f);
   // The camera side's cosine is the shading one (the rendering equation's); the light side's
-  // includes the adjoint correction for shading normals.
-  float G = absDot(z.ns, w) * lightEndCosine(y, -w, s) / d2;
-  ++rays_;
-  if (!scene_.visible(z.p, z.n, y.p, y.n)) return Spectrum(0.0f);
-  return z.beta * f * y.beta * G;
+  // includes the adjoint correction for shading normals. Neither in a medium.
+  float G = (inMedium(z) ? 1.0f : absDot(z.ns, w)) * lightEndCosine(y, -w, s) / d2;
+  const Spectrum T = unblocked(z, y, sampler);
+  if (isBlack(T)) return Spectrum(0.0f);
+  return z.beta * f * y.beta * T * G;
 }
 
 double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVertex* cameraPath,
@@ -345,15 +399,11 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     if (t == 1) {
       pE[s - 1] = toAreaDensity(scene_.camera().importance(z->p, w), z->p, *y);
     } else {
-      Frame fz(z->ns);
-      float pdf = scene_.bsdfAt(z->shape, z->uv).pdf(fz.toLocal(z->wo), fz.toLocal(w));
-      pE[s - 1] = toAreaDensity(pdf, z->p, *y);
+      pE[s - 1] = toAreaDensity(scatterDensity(*z, z->wo, w), z->p, *y);
     }
     if (s > 1) {  // x_{s-2} sampled from y, arriving from z
       const PathVertex& yPrev = lightPath[s - 2];
-      Frame fy(y->ns);
-      float pdf = scene_.bsdfAt(y->shape, y->uv).pdf(fy.toLocal(-w), fy.toLocal(y->wo));
-      pE[s - 2] = toAreaDensity(pdf, y->p, yPrev);
+      pE[s - 2] = toAreaDensity(scatterDensity(*y, -w, y->wo), y->p, yPrev);
     }
   }
   if (t > 0) {
@@ -362,7 +412,7 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       // density projected onto z_{t-2}.
       pL[0] = scene_.lightPickPdf(z->light) * scene_.environment()->pdf(-z->n);
       if (t > 1) {
-        pL[1] = scene_.environmentDiskDensity() * absDot(cameraPath[t - 2].n, z->n);
+        pL[1] = scene_.environmentDiskDensity() * cosineAt(cameraPath[t - 2], z->n);
       }
     } else if (s == 0) {
       // z lies on a light: its density as a light-subpath start, and the emission towards z_{t-2}.
@@ -382,16 +432,13 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       } else if (s == 1) {
         pdf = scene_.emissionPdf(y->light, y->n, w);
       } else {
-        Frame fy(y->ns);
-        pdf = scene_.bsdfAt(y->shape, y->uv).pdf(fy.toLocal(y->wo), fy.toLocal(w));
+        pdf = scatterDensity(*y, y->wo, w);
       }
-      pL[s] = atInfinity(*y) ? scene_.environmentDiskDensity() * absDot(z->n, y->n)
+      pL[s] = atInfinity(*y) ? scene_.environmentDiskDensity() * cosineAt(*z, y->n)
                              : toAreaDensity(pdf, y->p, *z);
       if (t > 1) {  // z_{t-2} sampled from z, arriving from y
         const PathVertex& zPrev = cameraPath[t - 2];
-        Frame fz(z->ns);
-        float pdfz = scene_.bsdfAt(z->shape, z->uv).pdf(fz.toLocal(-w), fz.toLocal(z->wo));
-        pL[s + 1] = toAreaDensity(pdfz, z->p, zPrev);
+        pL[s + 1] = toAreaDensity(scatterDensity(*z, -w, z->wo), z->p, zPrev);
       }
     }
   }
@@ -433,15 +480,17 @@ void BidirectionalTracer::visitStrategies(
       const int edges = s + t - 1;
       if (edges < 1 || edges > maxDepth_) continue;
       if (t == 1 && s == 0) continue;
-      if (evaluateStrategy(lightPath.data(), s, cameraPath.data(), t, film, &path)) visit(path);
+      if (evaluateStrategy(lightPath.data(), s, cameraPath.data(), t, film, sampler, &path))
+        visit(path);
     }
   }
 }
 
 bool BidirectionalTracer::evaluateStrategy(const PathVertex* light, int s, const PathVertex* camera,
-                                           int t, const Vec2f& film, StrategyPath* out) const {
+                                           int t, const Vec2f& film, Sampler& sampler,
+                                           StrategyPath* out) const {
   Vec2f splatFilm = film;
-  Spectrum c = connect(light, camera, s, t, &splatFilm);
+  Spectrum c = connect(light, camera, s, t, sampler, &splatFilm);
   if (isBlack(c)) return false;
   double w = misWeight(light, camera, s, t);
   if (w <= 0) return false;
@@ -473,7 +522,7 @@ void BidirectionalTracer::sampleStrategy(const Vec2f& film, Sampler& sampler, in
   if (traceCameraSubpath(film, sampler, t, false, cameraPath.data()) < t) return;
   if (s > 0 && traceLightSubpath(sampler, s, false, lightPath.data()) < s) return;
   StrategyPath path;
-  if (evaluateStrategy(lightPath.data(), s, cameraPath.data(), t, film, &path))
+  if (evaluateStrategy(lightPath.data(), s, cameraPath.data(), t, film, sampler, &path))
     splats->push_back({path.film, path.unweighted * float(path.weight * scale)});
 }
 

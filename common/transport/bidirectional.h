@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "common/film/splat_buffer.h"
+#include "common/sampling/sampler.h"
 #include "common/scene/scene.h"
 #include "common/transport/path_vertex.h"
-#include "common/sampling/sampler.h"
 
 namespace farm {
 
@@ -55,16 +55,29 @@ class BidirectionalTracer {
   int traceCameraSubpath(const Vec2f& film, Sampler& sampler, int maxVertices, bool roulette,
                          PathVertex* path) const;
   int traceLightSubpath(Sampler& sampler, int maxVertices, bool roulette, PathVertex* path) const;
-  int randomWalk(Ray ray, Spectrum beta, float pdfDir, Sampler& sampler, SampleStream stream,
-                 TransportMode mode, int maxVertices, bool roulette, PathVertex* path) const;
-  // Unweighted contribution of strategy (s, t); *film set for t == 1.
+  // Extends path[0] (whose ray leaves into `medium`) by up to maxVertices - 1 vertices on
+  // surfaces and in media; returns the vertex count.
+  int randomWalk(Ray ray, Spectrum beta, float pdfDir, int medium, Sampler& sampler,
+                 SampleStream stream, TransportMode mode, int maxVertices, bool roulette,
+                 PathVertex* path) const;
+  // Unweighted contribution of strategy (s, t); *film set for t == 1. Connections through media
+  // take the transmittance, estimated with numbers from the camera stream.
   Spectrum connect(const PathVertex* light, const PathVertex* camera, int s, int t,
-                   Vec2f* film) const;
+                   Sampler& sampler, Vec2f* film) const;
+  // The medium a ray from v in direction w starts in.
+  int mediumToward(const PathVertex& v, const Vec3f& w) const;
+  // What vertex v (a surface or a medium vertex) scatters from its wo towards w: the BSDF
+  // (zero where the normals disagree on w's side) or the phase function.
+  Spectrum scatterValue(const PathVertex& v, const Vec3f& w, TransportMode mode) const;
+  // The solid-angle density with which v's BSDF or phase function samples wTo from wFrom.
+  float scatterDensity(const PathVertex& v, const Vec3f& wFrom, const Vec3f& wTo) const;
+  // The transmittance between two finite vertices (1 or 0 without media: visibility).
+  Spectrum unblocked(const PathVertex& a, const PathVertex& b, Sampler& sampler) const;
   double misWeight(const PathVertex* light, const PathVertex* camera, int s, int t) const;
   // Strategy (s, t) of the traced subpaths: its connection, MIS weight and splat scaling, as
   // visitStrategies() reports it; false when it carries no light.
   bool evaluateStrategy(const PathVertex* light, int s, const PathVertex* camera, int t,
-                        const Vec2f& film, StrategyPath* out) const;
+                        const Vec2f& film, Sampler& sampler, StrategyPath* out) const;
 
   const Scene& scene_;
   int maxDepth_;

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/transport/medium_tracking.h"
+
 namespace farm {
 
 namespace {
@@ -110,26 +112,13 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
   }
   for (int depth = 1;; ++depth) {
     // The next vertex: the first surface along the ray that is not a null boundary, or a
-    // scattering event in a medium before it (null boundaries only change the medium).
+    // scattering event in a medium before it.
     SurfaceHit hit;
-    bool found;
-    MediumInteraction event;
-    Spectrum segmentWeight(1.0f);
-    for (;;) {
-      ++rays_;
-      found = scene_.intersect(ray, &hit);
-      if (medium >= 0) {
-        event = scene_.medium(medium).sampleInteraction(
-            mediumStart, ray.d, found ? length(hit.p - mediumStart) : kInfinity, sampler,
-            kCameraStream);
-        segmentWeight *= event.weight;
-        if (event.scattered) break;
-      }
-      if (!found || !scene_.isNullBoundary(hit.shape)) break;
-      medium = scene_.mediumOnSide(hit.shape, hit.ng, ray.d, medium);
-      ray = scene_.spawnRay(hit.p, hit.ng, ray.d);
-      mediumStart = hit.p;
-    }
+    const MediumStep step = traceThroughMedia(scene_, &ray, &medium, &mediumStart, sampler,
+                                              kCameraStream, &hit, &rays_);
+    const bool found = step.foundSurface;
+    const MediumInteraction& event = step.event;
+    const Spectrum& segmentWeight = step.weight;
     beta *= segmentWeight;
     if (isBlack(beta)) break;
 
@@ -188,17 +177,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       break;
     }
     const int light = scene_.lightOf(hit.shape);
-    if (vertices) {
-      PathVertex v;
-      v.p = hit.p;
-      v.n = hit.ng;
-      v.ns = hit.ns;
-      v.uv = hit.uv;
-      v.shape = hit.shape;
-      v.primitive = int(hit.primitive);
-      v.light = light;
-      vertices->push_back(v);
-    }
+    if (vertices) vertices->push_back(surfaceVertex(scene_, hit));
     if (light >= 0) {
       Spectrum Le = scene_.emitted(light, hit.ng, -ray.d);
       if (!isBlack(Le)) {

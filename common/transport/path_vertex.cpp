@@ -15,6 +15,19 @@ double toAreaDensity(double pdfSolidAngle, const Vec3f& from, const Vec3f& to, c
   return pdfSolidAngle * cosTo / d2;
 }
 
+PathVertex surfaceVertex(const Scene& scene, const SurfaceHit& hit) {
+  PathVertex v;
+  v.kind = PathVertex::Kind::Surface;
+  v.p = hit.p;
+  v.n = hit.ng;
+  v.ns = hit.ns;
+  v.uv = hit.uv;
+  v.shape = hit.shape;
+  v.primitive = int(hit.primitive);
+  v.light = scene.lightOf(hit.shape);
+  return v;
+}
+
 PathVertex vertexAtInfinity(const Scene& scene, int light, const Vec3f& from, const Vec3f& w) {
   PathVertex v;
   v.kind = PathVertex::Kind::Light;
@@ -36,6 +49,7 @@ namespace {
 // light side puts it in the other direction: the lobe's solid-angle ratio converts it.
 double scatterPdf(const Scene& scene, const PathVertex& v, const Vec3f& wFrom, const Vec3f& wTo,
                   bool fromLightSide) {
+  if (inMedium(v)) return scene.medium(v.medium).phase().eval(wFrom, wTo);
   Frame frame(v.ns);
   Vec3f wo = frame.toLocal(wFrom);
   Vec3f wi = frame.toLocal(wTo);
@@ -73,7 +87,7 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
     // The environment: its direction's density, then the disk's projected onto x_1.
     const EnvironmentLight* environment = scene.environment();
     pL[0] = environment ? double(scene.lightPickPdf(x0.light)) * environment->pdf(-x0.n) : 0.0;
-    if (n > 2) pL[1] = double(scene.environmentDiskDensity()) * double(absDot(x[1]->n, x0.n));
+    if (n > 2) pL[1] = double(scene.environmentDiskDensity()) * double(cosineAt(*x[1], x0.n));
   } else if (onPointLight(x0)) {
     // The position's delta coefficient, then the emission's direction density.
     pL[0] = double(scene.lightPickPdf(x0.light));

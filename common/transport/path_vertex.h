@@ -8,18 +8,26 @@
 namespace farm {
 
 class Scene;
+struct SurfaceHit;
 
 struct PathVertex {
-  enum class Kind : uint8_t { Camera, Light, Surface };
+  // Medium: a scattering event inside a participating medium (no surface: n and ns are zero,
+  // the phase function scatters, and no cosine enters its geometric factors).
+  enum class Kind : uint8_t { Camera, Light, Surface, Medium };
   Kind kind = Kind::Surface;
   Vec3f p;
-  Vec3f n;   // geometric normal; zero for the (pinhole) camera; at infinity, see atInfinity
+  Vec3f n;   // geometric normal; zero for the (pinhole) camera and in media; at infinity, see
+             // atInfinity
   Vec3f ns;  // shading normal (the BSDF's frame); n for lights, zero for the camera
   Vec3f wo;  // unit direction to the previous vertex of its own subpath
   Vec2f uv;  // texture coordinates, where the BSDF is looked up (Scene::bsdfAt)
   int shape = -1;
-  int primitive = -1;     // the shape's triangle (0 for a sphere), or -1 where not known
-  int light = -1;         // the area light this vertex lies on, or -1
+  int primitive = -1;  // the shape's triangle (0 for a sphere), or -1 where not known
+  int light = -1;      // the area light this vertex lies on, or -1
+  // The participating medium (Scene::medium, -1 for vacuum) that the vertex lies in: for a
+  // surface, the one its subpath arrived through (a surface without a medium interface has it
+  // on both sides); for a light, the one around it.
+  int medium = -1;
   Spectrum beta;          // subpath throughput up to here, divided by the sampling densities
   float pdfFwd = 0;       // area density of this vertex, sampled from its own subpath's side
   float pdfRev = 0;       // area density of this vertex, sampled from the other side
@@ -43,9 +51,23 @@ inline bool onPointLight(const PathVertex& v) {
   return v.kind == PathVertex::Kind::Light && v.shape < 0 && !v.infinite;
 }
 
+// The surface vertex at a ray's hit: position, normals, texture coordinates, shape, triangle
+// and light (the rest left at their defaults).
+PathVertex surfaceVertex(const Scene& scene, const SurfaceHit& hit);
+
 // The vertex at infinity that a ray from `from` in unit direction w reaches when it leaves the
 // scene: on the environment light `light`, its light travelling along -w.
 PathVertex vertexAtInfinity(const Scene& scene, int light, const Vec3f& from, const Vec3f& w);
+
+inline bool inMedium(const PathVertex& v) {
+  return v.kind == PathVertex::Kind::Medium;
+}
+
+// The cosine that converts densities and geometric factors at v for direction w: the geometric
+// normal's, and 1 in a medium (where a density per solid angle is one per volume times d^2).
+inline float cosineAt(const PathVertex& v, const Vec3f& w) {
+  return inMedium(v) ? 1.0f : absDot(v.n, w);
+}
 
 // The unit direction from a to b, either of which may lie at infinity.
 inline Vec3f directionBetween(const PathVertex& a, const PathVertex& b) {
