@@ -24,6 +24,7 @@
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/loaders/serialized_reader.h"
+#include "common/scene/loaders/vdb_reader.h"
 #include "common/scene/medium.h"
 #include "common/scene/mesh_cleanup.h"
 
@@ -1184,19 +1185,28 @@ class MitsubaLoader {
     Matrix4 toWorld = Matrix4::identity();
     if (pugi::xml_node t = props.take("toWorld")) toWorld = transformOf(t);
     if (pugi::xml_node n = props.take("sendData")) (void)n;  // a network-rendering switch
+    // The farm's extension: an OpenVDB file's float grid (gridName, or the first one).
+    const bool vdb = filename.size() > 4 && toLower(filename.substr(filename.size() - 4)) == ".vdb";
+    pugi::xml_node gridNameNode;
+    const std::string gridName = vdb ? getString(props, "gridName", "", &gridNameNode) : "";
     rejectUnused(props, "volume type 'gridvolume'");
-    const std::string bytes =
-        readSceneFile(sceneFilePath(dir_, filename, "volume file", path_, lineOf(fileNode)),
-                      "volume file", path_, lineOf(fileNode));
-    GridVolume volume;
+    const Matrix4 worldToVolume = toWorld.inverse();
+    if (!worldToVolume.isFinite()) fail(node, "the gridvolume's toWorld is singular");
+    const std::filesystem::path file =
+        sceneFilePath(dir_, filename, "volume file", path_, lineOf(fileNode));
     std::string problem;
+    if (vdb) {
+      if (!readVdbDensity(file, gridName, m, &problem)) fail(fileNode, filename + ": " + problem);
+      m->worldToGrid = m->worldToGrid * worldToVolume;
+      return 1;
+    }
+    const std::string bytes = readSceneFile(file, "volume file", path_, lineOf(fileNode));
+    GridVolume volume;
     if (!decodeGridVolume(bytes, &volume, &problem)) fail(fileNode, filename + ": " + problem);
     m->nx = volume.nx, m->ny = volume.ny, m->nz = volume.nz;
     m->density = std::move(volume.values);
     m->cellCentred = false;
     const Vec3f extent = volume.boundsMax - volume.boundsMin;
-    const Matrix4 worldToVolume = toWorld.inverse();
-    if (!worldToVolume.isFinite()) fail(node, "the gridvolume's toWorld is singular");
     m->worldToGrid = Matrix4::scale(Vec3f(1 / extent.x, 1 / extent.y, 1 / extent.z)) *
                      Matrix4::translate(-volume.boundsMin) * worldToVolume;
     return 1;

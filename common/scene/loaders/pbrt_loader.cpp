@@ -13,6 +13,7 @@
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/loaders/pbrt_tokenizer.h"
 #include "common/scene/loaders/ply_reader.h"
+#include "common/scene/loaders/vdb_reader.h"
 #include "common/scene/medium.h"
 
 namespace farm {
@@ -1234,15 +1235,19 @@ class PbrtLoader {
 
   // MakeNamedMedium: "homogeneous", or a density grid (pbrt-v3's "heterogeneous", pbrt-v4's
   // "uniformgrid": "density" with x fastest over nx * ny * nz values at cell centres, spanning
-  // p0 to p1 in the space of the current transformation). sigma_a and sigma_s are required:
-  // pbrt-v3 and v4 default them differently.
+  // p0 to p1 in the space of the current transformation; pbrt-v4's "nanovdb" with the grid
+  // "density" of an OpenVDB file, a .vdb: NanoVDB's own files are not read). sigma_a and
+  // sigma_s are required: pbrt-v3 and v4 default them differently.
   int makeMedium(Directive& d) {
     const std::string type = getString(d, "type", "");
     const std::string what = "medium '" + d.strings[0] + "' of type '" + type + "'";
-    if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid")
+    if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid" &&
+        type != "nanovdb")
       fail(d, type.empty() ? "MakeNamedMedium '" + d.strings[0] + "' has no \"string type\""
-                           : what + " is not supported (homogeneous, heterogeneous, uniformgrid)");
-    if (type == "uniformgrid") sawV4_ = true;
+                           : what +
+                                 " is not supported (homogeneous, heterogeneous, uniformgrid, "
+                                 "nanovdb with an OpenVDB file)");
+    if (type == "uniformgrid" || type == "nanovdb") sawV4_ = true;
     if (d.params.has("preset"))
       failParam(d, *d.params.find("preset"),
                 what +
@@ -1264,7 +1269,20 @@ class PbrtLoader {
     m.sigmaA *= float(scale);
     m.sigmaS *= float(scale);
     m.g = float(getFloat(d, "g", 0));
-    if (type != "homogeneous") {
+    if (type == "nanovdb") {
+      const std::string filename = getString(d, "filename", "");
+      if (filename.empty()) fail(d, what + " needs a \"string filename\"");
+      if (filename.size() < 5 || filename.substr(filename.size() - 4) != ".vdb")
+        fail(d, what + ": '" + filename +
+                    "' is not an OpenVDB file (.vdb); NanoVDB files are not read: convert it "
+                    "with nanovdb_convert");
+      const fs::path file = sceneFilePath(dir_, filename, "volume file", d.file, d.line);
+      std::string problem;
+      if (!readVdbDensity(file, "density", &m, &problem)) fail(d, filename + ": " + problem);
+      const Matrix4 worldToMedium = attrs_.ctm.inverse();
+      if (!worldToMedium.isFinite()) fail(d, what + ": the transformation is singular");
+      m.worldToGrid = m.worldToGrid * worldToMedium;
+    } else if (type != "homogeneous") {
       m.type = MediumDescription::Type::Grid;
       const long long nx = getInt(d, "nx", 1), ny = getInt(d, "ny", 1), nz = getInt(d, "nz", 1);
       if (nx < 1 || ny < 1 || nz < 1 || nx * ny > (1ll << 28) / nz)
