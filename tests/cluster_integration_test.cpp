@@ -176,7 +176,7 @@ TEST_P(ClusterFailure, KilledWorkerChangesNothingButTime) {
   std::vector<std::string> settings = {"--algorithm", c.algorithm, "--width", "64",
                                        "--height",    "48",        "--seed",  "3"};
   settings.insert(settings.end(), c.budget.begin(), c.budget.end());
-  const std::string job = submitJob(coordinator.address(), settings, scratch.path());
+  const std::string job = submitJob(coordinator.address(), settings, scratch.path(), c.scene);
   ASSERT_EQ(job.rfind("job-", 0), 0u) << "last line of stdout: " << job;
 
   const auto deadline = std::chrono::steady_clock::now() + seconds(60);
@@ -198,8 +198,8 @@ TEST_P(ClusterFailure, KilledWorkerChangesNothingButTime) {
   ASSERT_EQ(fetched.exitCode, 0) << fetched.err << "\n" << coordinator.log();
   EXPECT_EQ(survivor->stop(seconds(20)), 0);
 
-  std::vector<std::string> render = {FARM_CLI_BIN, "render", kScene, "-o", scratch / "embedded.exr",
-                                     "--threads",  "2"};
+  std::vector<std::string> render = {
+      FARM_CLI_BIN, "render", c.scene, "-o", scratch / "embedded.exr", "--threads", "2"};
   render.insert(render.end(), settings.begin(), settings.end());
   CommandResult rendered = runCommand(render, seconds(120), scratch.path());
   ASSERT_EQ(rendered.exitCode, 0) << rendered.err;
@@ -223,18 +223,30 @@ INSTANTIATE_TEST_SUITE_P(
                       ClusterCase{"pssmlt",
                                   {"--mpp", "8"},
                                   std::string(FARM_SHARED_DIR) + "/scenes/veach-ajar/scene.pbrt",
-                                  "pssmlt_veach_ajar_pbrt"}),
+                                  "pssmlt_veach_ajar_pbrt"},
+                      // participating media, the smoke's grid file through the bundle upload
+                      ClusterCase{"bdpt",
+                                  {"--spp", "4"},
+                                  std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml",
+                                  "bdpt_smoky_box_media"}),
     [](const auto& info) {
       std::string name = info.param.name.empty() ? info.param.algorithm : info.param.name;
       std::replace(name.begin(), name.end(), '-', '_');
       return name;
     });
 
-INSTANTIATE_TEST_SUITE_P(Algorithms, ClusterFailure,
-                         ::testing::Values(ClusterCase{"pt", {"--spp", "256"}},
-                                           ClusterCase{"mlt", {"--mpp", "256"}},
-                                           ClusterCase{"erpt", {"--spp", "8"}}),
-                         [](const auto& info) { return info.param.algorithm; });
+INSTANTIATE_TEST_SUITE_P(
+    Algorithms, ClusterFailure,
+    ::testing::Values(ClusterCase{"pt", {"--spp", "256"}}, ClusterCase{"mlt", {"--mpp", "256"}},
+                      ClusterCase{"erpt", {"--spp", "8"}},
+                      // chains through media (ratio tracking's numbers too) resume exactly
+                      ClusterCase{"mmlt",
+                                  {"--mpp", "128"},
+                                  std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml",
+                                  "mmlt_smoky_box_media"}),
+    [](const auto& info) {
+      return info.param.name.empty() ? info.param.algorithm : info.param.name;
+    });
 
 }  // namespace
 }  // namespace farm::testing
