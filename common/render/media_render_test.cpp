@@ -59,7 +59,7 @@ TEST(MediaRender, PssmltOverPathTracingAgreesWithPathTracing) {
   expectAgreesWithPathTracing(Algorithm::PSSMLTOverPT, 256);
 }
 TEST(MediaRender, PssmltAgreesWithPathTracing) {
-  expectAgreesWithPathTracing(Algorithm::PSSMLT, 128);
+  expectAgreesWithPathTracing(Algorithm::PSSMLT, 64);
 }
 TEST(MediaRender, MultiplexedAgreesWithPathTracing) {
   expectAgreesWithPathTracing(Algorithm::MMLT, 128);

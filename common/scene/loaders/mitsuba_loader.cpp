@@ -1260,10 +1260,11 @@ class MitsubaLoader {
         fail(node, "an emitting shape that bounds a medium needs a BSDF (its surface scatters)");
       shape.nullBoundary = true;
     } else if (bsdf < 0) {
-      // Mitsuba gives a shape without a material a diffuse one of reflectance 0.5.
+      // Mitsuba gives a shape without a material a diffuse one of reflectance 0.5, and an
+      // emitter without one an absorbing one (its Shape::configure).
       BsdfDescription def;
       def.type = BsdfDescription::Type::Diffuse;
-      def.reflectance = Spectrum(0.5f);
+      def.reflectance = Spectrum(emitterNode ? 0.0f : 0.5f);
       bsdf = addBsdf(def);
     }
     shape.bsdf = bsdf;

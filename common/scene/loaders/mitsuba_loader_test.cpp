@@ -166,6 +166,26 @@ TEST(MitsubaLoaderTest, CornellBox) {
   for (size_t t = 0; t < 2; ++t) EXPECT_GT(dot(triangleNormal(light, t), light.normals[0]), 0);
 }
 
+// Mitsuba's Shape::configure: a plain shape without a BSDF gets a diffuse one of reflectance
+// 0.5, an emitter an absorbing one (a light does not reflect), a medium boundary none.
+TEST(MitsubaLoaderTest, ShapesWithoutABsdfGetMitsubasDefaults) {
+  TempDir dir;
+  const SceneDescription s = loadMitsubaScene(dir.write("d.xml", sceneXml(R"(<shape type="cube"/>
+<shape type="rectangle"><emitter type="area"/></shape>
+<medium type="homogeneous" id="m"/>
+<shape type="sphere"><ref name="interior" id="m"/></shape>
+)")));
+  ASSERT_EQ(s.shapes.size(), 3u);
+  const BsdfDescription& plain = s.bsdfs.at(size_t(s.shapes[0].bsdf));
+  EXPECT_EQ(plain.type, BsdfDescription::Type::Diffuse);
+  EXPECT_FLOAT_EQ(plain.reflectance.x, 0.5f);
+  const BsdfDescription& light = s.bsdfs.at(size_t(s.shapes[1].bsdf));
+  EXPECT_EQ(light.type, BsdfDescription::Type::Diffuse);
+  EXPECT_TRUE(isBlack(light.reflectance));
+  EXPECT_TRUE(s.shapes[1].isEmitter);
+  EXPECT_TRUE(s.shapes[2].nullBoundary);
+}
+
 TEST(MitsubaLoaderTest, CubeHasTwelveOutwardTriangles) {
   SceneDescription s = loadMitsubaScene(scenePath("cornell-box"));
   for (int i : {5, 6}) {
