@@ -391,11 +391,17 @@ Bsdf Scene::bsdfAt(int shape, const Vec2f& uv) const {
   return bsdf;
 }
 
+void Scene::offsetEnds(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1, Vec3f* o,
+                       Vec3f* e) const {
+  const Vec3f d = p1 - p0;
+  *o = p0, *e = p1;
+  if (lengthSquared(n0) > 0) *o = p0 + n0 * ((dot(n0, d) >= 0 ? 1.0f : -1.0f) * offsetFor(p0));
+  if (lengthSquared(n1) > 0) *e = p1 + n1 * ((dot(n1, d) <= 0 ? 1.0f : -1.0f) * offsetFor(p1));
+}
+
 bool Scene::visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1) const {
-  Vec3f d = p1 - p0;
-  Vec3f o = p0, e = p1;
-  if (lengthSquared(n0) > 0) o = p0 + n0 * ((dot(n0, d) >= 0 ? 1.0f : -1.0f) * offsetFor(p0));
-  if (lengthSquared(n1) > 0) e = p1 + n1 * ((dot(n1, d) <= 0 ? 1.0f : -1.0f) * offsetFor(p1));
+  Vec3f o, e;
+  offsetEnds(p0, n0, p1, n1, &o, &e);
   Vec3f dir = e - o;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -486,11 +492,10 @@ Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* e
 Spectrum Scene::transmittance(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1,
                               int medium, Sampler& sampler, SampleStream stream) const {
   if (!tracksMedia_) return visible(p0, n0, p1, n1) ? Spectrum(1.0f) : Spectrum(0.0f);
-  // The ray's end points offset off their surfaces as visible() does.
+  // The ray's end points offset off their surfaces as visible()'s are.
   const Vec3f d = p1 - p0;
-  Vec3f o = p0, e = p1;
-  if (lengthSquared(n0) > 0) o = p0 + n0 * ((dot(n0, d) >= 0 ? 1.0f : -1.0f) * offsetFor(p0));
-  if (lengthSquared(n1) > 0) e = p1 + n1 * ((dot(n1, d) <= 0 ? 1.0f : -1.0f) * offsetFor(p1));
+  Vec3f o, e;
+  offsetEnds(p0, n0, p1, n1, &o, &e);
   if (!(lengthSquared(d) > 0)) return Spectrum(1.0f);
   return transmittanceAlong(p0, o, normalize(d), &p1, &e, medium, sampler, stream);
 }

@@ -182,6 +182,10 @@ class Scene {
                               int medium, Sampler& sampler, SampleStream stream) const;
 
   float offsetFor(const Vec3f& p) const;
+  // The ends of the segment p0 - p1 moved off their surfaces (n = 0: a point, not moved), each
+  // to the side the segment leaves it by: where visibility and transmittance rays run between.
+  void offsetEnds(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1, Vec3f* o,
+                  Vec3f* e) const;
 
   SceneDescription desc_;
   Camera camera_;

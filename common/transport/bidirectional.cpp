@@ -30,6 +30,12 @@ float lightEndCosine(const PathVertex& y, const Vec3f& w, int s) {
   return absDot(w, y.ns) * shadingCorrection(y.wo, w, y.n, y.ns);
 }
 
+// |cos| at the camera subpath's end z towards w: the shading cosine (the rendering equation's);
+// none in a medium.
+float cameraEndCosine(const PathVertex& z, const Vec3f& w) {
+  return inMedium(z) ? 1.0f : absDot(z.ns, w);
+}
+
 }  // namespace
 
 int BidirectionalTracer::mediumToward(const PathVertex& v, const Vec3f& w) const {
@@ -55,8 +61,7 @@ float BidirectionalTracer::scatterDensity(const PathVertex& v, const Vec3f& wFro
 Spectrum BidirectionalTracer::unblocked(const PathVertex& a, const PathVertex& b,
                                         Sampler& sampler) const {
   ++rays_;
-  if (!scene_.hasMedia())
-    return scene_.visible(a.p, a.n, b.p, b.n) ? Spectrum(1.0f) : Spectrum(0.0f);
+  // Without media, Scene::transmittance is visibility.
   return scene_.transmittance(a.p, a.n, b.p, b.n, mediumToward(a, directionBetween(a, b)), sampler,
                               kCameraStream);
 }
@@ -252,7 +257,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   y.ns = n;
   y.shape = light.shape;
   y.light = l;
-  if (scene_.hasMedia()) y.medium = scene_.mediumAt(scene_.spawnRay(p, n, n).o);
+  y.medium = scene_.mediumAt(scene_.spawnRay(p, n, n).o);
   float pdfPos = pickPdf / light.area;
   y.pdfFwd = pdfPos;
   y.beta = light.radiance / pdfPos;
@@ -294,7 +299,7 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
     if (isBlack(f)) return Spectrum(0.0f);
     const Spectrum T = unblocked(z, y, sampler);
     if (isBlack(T)) return Spectrum(0.0f);
-    return z.beta * f * y.beta * T * ((inMedium(z) ? 1.0f : absDot(z.ns, w)) / d2);
+    return z.beta * f * y.beta * T * (cameraEndCosine(z, w) / d2);
   }
   if (atInfinity(y)) {                  // s == 1: the environment's direction, if nothing blocks it
     if (t == 1) return Spectrum(0.0f);  // no direction of it reaches a point-like lens
@@ -304,12 +309,10 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
     Spectrum f = scatterValue(z, w, TransportMode::Radiance);
     if (isBlack(f)) return Spectrum(0.0f);
     ++rays_;
-    const Spectrum T = scene_.hasMedia()
-                           ? scene_.transmittanceToInfinity(z.p, z.n, w, mediumToward(z, w),
-                                                            sampler, kCameraStream)
-                           : Spectrum(scene_.escapes(z.p, z.n, w) ? 1.0f : 0.0f);
+    const Spectrum T =
+        scene_.transmittanceToInfinity(z.p, z.n, w, mediumToward(z, w), sampler, kCameraStream);
     if (isBlack(T)) return Spectrum(0.0f);
-    return z.beta * f * y.beta * T * (inMedium(z) ? 1.0f : absDot(z.ns, w));
+    return z.beta * f * y.beta * T * cameraEndCosine(z, w);
   }
   if (t == 1) {  // light tracing: connect to the camera (its lens point) and splat there
     const Camera& camera = scene_.camera();
@@ -347,7 +350,7 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   if (isBlack(f)) return Spectrum(0.0f);
   // The camera side's cosine is the shading one (the rendering equation's); the light side's
   // includes the adjoint correction for shading normals. Neither in a medium.
-  float G = (inMedium(z) ? 1.0f : absDot(z.ns, w)) * lightEndCosine(y, -w, s) / d2;
+  float G = cameraEndCosine(z, w) * lightEndCosine(y, -w, s) / d2;
   const Spectrum T = unblocked(z, y, sampler);
   if (isBlack(T)) return Spectrum(0.0f);
   return z.beta * f * y.beta * T * G;

@@ -1184,7 +1184,7 @@ class MitsubaLoader {
     if (!fileNode || trim(filename).empty()) fail(node, "a gridvolume needs a filename");
     Matrix4 toWorld = Matrix4::identity();
     if (pugi::xml_node t = props.take("toWorld")) toWorld = transformOf(t);
-    if (pugi::xml_node n = props.take("sendData")) (void)n;  // a network-rendering switch
+    props.take("sendData");  // a network-rendering switch
     // The farm's extension: an OpenVDB file's float grid (gridName, or the first one).
     const bool vdb = filename.size() > 4 && toLower(filename.substr(filename.size() - 4)) == ".vdb";
     pugi::xml_node gridNameNode;
