@@ -49,6 +49,8 @@ struct RenderOptions {
   std::string mutationMix;
   double erptChains = farm::RenderSettings().erptChains;
   int erptLength = farm::RenderSettings().erptLength;
+  int mediumSamples = farm::RenderSettings().mediumSamples;
+  int mediumMarch = farm::RenderSettings().mediumMarchSteps;
   int chains = 64;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
@@ -84,6 +86,17 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       ->default_str("1");
   command->add_option("--erpt-length", o->erptLength, "erpt: mutations per chain")
       ->default_str("100");
+  command
+      ->add_option("--medium-samples", o->mediumSamples,
+                   "mlt through density grids: ratio-tracking estimates averaged into each "
+                   "transmittance of f (pseudo-marginal MLT: exact for any count; more give "
+                   "fewer rejections at their cost)")
+      ->default_str("1");
+  command
+      ->add_option("--medium-march", o->mediumMarch,
+                   "mlt through density grids: march each transmittance with this many steps "
+                   "instead (deterministic, biased by the step); 0: estimate")
+      ->default_str("0");
   command
       ->add_option("--chains", o->chains,
                    "independent Markov chains (pssmlt, pssmlt-pt, mmlt, mlt), each seeded by the "
@@ -146,6 +159,8 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
   s->largeStepProbability = o.largeStep;
   s->erptChains = o.erptChains;
   s->erptLength = o.erptLength;
+  s->mediumSamples = o.mediumSamples;
+  s->mediumMarchSteps = o.mediumMarch;
   if (o.chains < 1 || o.chains > (1 << 20)) {
     *error = "--chains must be between 1 and 1048576, not " + std::to_string(o.chains);
     return false;

@@ -80,6 +80,8 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   toProto(settings.mutationMix, m.mutable_mutation_mix());
   m.set_erpt_chains(settings.erptChains);
   m.set_erpt_length(settings.erptLength);
+  m.set_medium_samples(settings.mediumSamples);
+  m.set_medium_march_steps(settings.mediumMarchSteps);
   return m;
 }
 
@@ -99,6 +101,8 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   if (!fromProto(m.mutation_mix(), &s.mutationMix, error)) return false;
   if (m.erpt_chains() != 0) s.erptChains = m.erpt_chains();
   if (m.erpt_length() != 0) s.erptLength = m.erpt_length();
+  if (m.medium_samples() != 0) s.mediumSamples = m.medium_samples();
+  s.mediumMarchSteps = m.medium_march_steps();
   *out = s;
   return true;
 }
@@ -128,6 +132,8 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_erpt_chains(spec.erptChains);
   m.set_erpt_length(spec.erptLength);
   m.set_erpt_deposit(spec.erptDeposit);
+  m.set_medium_samples(spec.mediumSamples);
+  m.set_medium_march_steps(spec.mediumMarchSteps);
   return m;
 }
 
@@ -156,6 +162,8 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   s.erptChains = m.erpt_chains();
   s.erptLength = m.erpt_length();
   s.erptDeposit = m.erpt_deposit();
+  s.mediumSamples = m.medium_samples();
+  s.mediumMarchSteps = m.medium_march_steps();
   if (s.flushInterval <= 0) {
     *error = "chain " + std::to_string(s.chainIndex) + " has flush interval " +
              std::to_string(s.flushInterval) + " (must be > 0)";

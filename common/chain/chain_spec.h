@@ -34,6 +34,9 @@ struct ChainSpec {
   double erptChains = 1;
   int erptLength = 100;
   double erptDeposit = 0;
+  // mlt through density grids: the estimate of each transmittance in f (see PathChain).
+  int mediumSamples = 1;
+  int mediumMarchSteps = 0;
   // mutations (pssmlt) or samples (pt/bdpt) this chain runs; < 0: until told to stop
   int64_t budget = 0;
   int64_t flushInterval = 0;  // mutations (or samples) between flushes

@@ -37,7 +37,8 @@ void visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, in
                            if (!(share > 0) || !std::isfinite(share)) return;
                            Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
                            if (manifoldActive && manifold.covers(x)) return;
-                           if (!x.contribution(scene, maxDepth).carriesLight()) return;
+                           if (!x.contribution(scene, maxDepth, &kCarriesLightCheck).carriesLight())
+                             return;
                            visit(std::move(x), share);
                          });
   manifold.sample(sampler, [&](const Path& x, double value) { visit(Path(x), value); });

@@ -64,7 +64,7 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
       x.vertices.clear();
       if (seed.light) x.vertices.push_back(*seed.light);
       x.vertices.insert(x.vertices.end(), seed.camera, seed.camera + seed.count);
-      if (!chain.start(x)) {
+      if (!chain.start(x, rng)) {
         // A path the chains cannot evaluate (a lobe at the edge of rounding): its energy
         // stays where path tracing put it.
         film.add(seedFilm, seed.value);
@@ -81,7 +81,7 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
         deposit = energy / (length * kMaxErptChains);
       }
       for (int c = 0; c < chains; ++c) {
-        if (c > 0) chain.start(x);  // the first starts where the check above left it
+        if (c > 0) chain.start(x, rng);  // the first starts where the check above left it
         for (int i = 0; i < spec.erptLength; ++i) chain.step(rng, film, float(deposit), &flusher);
       }
     });

@@ -19,22 +19,30 @@ namespace farm {
 namespace {
 
 constexpr uint64_t kMltChainDomain = 0x3175;
-constexpr uint32_t kStateMagic = 0x3154534d;  // "MST1"
+// "MST2": the RNG, the current path's estimate of f (pseudo-marginal chains keep it), the path.
+constexpr uint32_t kStateMagic = 0x3254534d;
 
-std::string serializeState(const Rng& rng, const Path& path) {
+std::string serializeState(const Rng& rng, const Path& path, const PathContribution& f) {
   std::string s;
   appendBytes(s, kStateMagic);
   appendBytes(s, rng.state());
   appendBytes(s, rng.increment());
+  appendBytes(s, f.logLuminance);
+  appendBytes(s, f.color);
+  appendBytes(s, f.film);
   return s + path.serialize();
 }
 
-bool deserializeState(const std::string& bytes, const Scene& scene, Rng* rng, Path* path) {
+bool deserializeState(const std::string& bytes, const Scene& scene, Rng* rng, Path* path,
+                      PathContribution* f) {
   size_t at = 0;
   uint32_t magic;
   uint64_t state, inc;
   if (!readBytes(bytes, at, &magic) || magic != kStateMagic || !readBytes(bytes, at, &state) ||
-      !readBytes(bytes, at, &inc) || !(inc & 1) || !path->deserialize(bytes.substr(at), scene))
+      !readBytes(bytes, at, &inc) || !(inc & 1) || !readBytes(bytes, at, &f->logLuminance) ||
+      !readBytes(bytes, at, &f->color) || !readBytes(bytes, at, &f->film) ||
+      !std::isfinite(f->logLuminance) || !isFinite(f->color) || !std::isfinite(f->film.x) ||
+      !std::isfinite(f->film.y) || !path->deserialize(bytes.substr(at), scene))
     return false;
   rng->restore(state, inc);
   return true;
@@ -53,7 +61,8 @@ double logAcceptanceRatio(const Mutation& mutation, const Path& x, const PathCon
   return std::isnan(logR) ? -INFINITY : logR;
 }
 
-PathChain::PathChain(const Scene& scene, int maxDepth, const MutationMix& mix)
+PathChain::PathChain(const Scene& scene, int maxDepth, const MutationMix& mix, int mediumSamples,
+                     int marchSteps)
     : scene_(scene),
       context_{scene, maxDepth},
       bidirectional_(context_),
@@ -65,7 +74,14 @@ PathChain::PathChain(const Scene& scene, int maxDepth, const MutationMix& mix)
       mutations_{&bidirectional_, &lensSubpath_, &lens_, &caustic_, &multiChain_, &manifold_},
       weights_{mix.bidirectional,          mix.lensSubpath,
                mix.lensPerturbation,       mix.causticPerturbation,
-               mix.multiChainPerturbation, mix.manifoldPerturbation} {}
+               mix.multiChainPerturbation, mix.manifoldPerturbation},
+      mediumSamples_(std::max(mediumSamples, 1)),
+      marchSteps_(std::max(marchSteps, 0)) {}
+
+PathContribution PathChain::contribution(const Path& x, Rng& rng) const {
+  const TransmittanceEstimator estimator{&rng, mediumSamples_, marchSteps_};
+  return x.contribution(scene_, context_.maxDepth, &estimator);
+}
 
 PathChain::Selection PathChain::select(const Path& x) const {
   Selection s;
@@ -76,11 +92,22 @@ PathChain::Selection PathChain::select(const Path& x) const {
   return s;
 }
 
-bool PathChain::start(const Path& x) {
+bool PathChain::start(const Path& x, Rng& rng) {
   x_ = x;
-  fx_ = x_.contribution(scene_, context_.maxDepth);
+  // A ratio-tracking estimate is 0 now and then (its roulette) where f is not: a chain can only
+  // start where its estimate is positive.
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    fx_ = contribution(x_, rng);
+    if (fx_.carriesLight() || !scene_.hasMedia()) break;
+  }
   sx_ = select(x_);
   return fx_.carriesLight();
+}
+
+void PathChain::resume(const Path& x, const PathContribution& fx) {
+  x_ = x;
+  fx_ = fx;
+  sx_ = select(x_);
 }
 
 void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* flusher) {
@@ -102,7 +129,7 @@ void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* f
     const bool tallyWalks = flusher && &mutation == &manifold_;
     ManifoldWalkStats walksBefore;
     if (tallyWalks) walksBefore = manifold_.walkStats();
-    const bool proposed = mutation.propose(x_, rng, &y_, &record);
+    bool proposed = mutation.propose(x_, rng, &y_, &record);
     if (tallyWalks) {
       // The walks it ran (forward, and back to check the move reversible), and which converged.
       const ManifoldWalkStats& after = manifold_.walkStats();
@@ -110,8 +137,14 @@ void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* f
       for (uint64_t i = 0; i < after.walks - walksBefore.walks; ++i)
         flusher->tally("manifold walk", i < converged);
     }
+    // A perturbation moves surface vertices only: one that would turn a vertex in a medium
+    // into a surface's (or back) cannot be reversed, and is rejected.
+    if (proposed && record.added == record.removed && chosen != int(MutationType::Bidirectional)) {
+      for (size_t i = 0; i < x_.vertices.size() && proposed; ++i)
+        proposed = inMedium(x_.vertices[i]) == inMedium(y_.vertices[i]);
+    }
     if (proposed) {
-      fy = y_.contribution(scene_, context_.maxDepth);
+      fy = contribution(y_, rng);
       if (fy.carriesLight()) {
         sy = select(y_);
         const double logR = logAcceptanceRatio(mutation, x_, fx_, y_, fy, record,
@@ -137,20 +170,24 @@ void runMltChain(const Scene& scene, const ChainSpec& spec,
   const std::string chain = "chain " + std::to_string(spec.chainIndex);
   Rng rng(spec.seed, streamId(kMltChainDomain, spec.chainIndex));
   Path x;
+  PathChain walker(scene, spec.maxDepth, spec.mutationMix, spec.mediumSamples,
+                   spec.mediumMarchSteps);
   if (!spec.resumeState.empty()) {
-    if (!deserializeState(spec.resumeState, scene, &rng, &x))
+    PathContribution fx;
+    if (!deserializeState(spec.resumeState, scene, &rng, &x, &fx))
       throw std::runtime_error(chain + ": the resume state is corrupt");
+    walker.resume(x, fx);
   } else if (spec.seedPath.empty() || !x.deserialize(spec.seedPath, scene)) {
     throw std::runtime_error(chain + " has no seed path of this scene");
-  }
-  PathChain walker(scene, spec.maxDepth, spec.mutationMix);
-  if (!walker.start(x))
+  } else if (!walker.start(x, rng)) {
     throw std::runtime_error(chain + ": the seed path carries no light on this host");
+  }
   ChainFlusher flusher(spec, scene, onFlush, cancel);
   while (flusher.budgetLeft()) {
     walker.step(rng, flusher.film(), 1.0f, &flusher);
-    if (!flusher.countMutation(walker.rays(),
-                               [&] { return serializeState(rng, walker.current()); }))
+    if (!flusher.countMutation(walker.rays(), [&] {
+          return serializeState(rng, walker.current(), walker.currentContribution());
+        }))
       return;
   }
 }

@@ -22,18 +22,29 @@
 namespace farm {
 
 // The Metropolis-Hastings step over path space that mlt's chains and ERPT's short chains share.
+//
+// In media f is evaluated with an estimate of each grid's transmittance (mediumSamples
+// ratio-tracking estimates, or marching with marchSteps > 0): the pseudo-marginal chain of
+// Kronander et al. 2015 (section 3.3), which keeps the estimate f^(x) with its state and
+// accepts with f^(y) / f^(x), so that it is exactly distributed as f whatever the estimate's
+// variance (more samples: fewer rejections for a lucky f^(x), at their cost).
 class PathChain {
  public:
-  PathChain(const Scene& scene, int maxDepth, const MutationMix& mix);
+  PathChain(const Scene& scene, int maxDepth, const MutationMix& mix, int mediumSamples = 1,
+            int marchSteps = 0);
   PathChain(const PathChain&) = delete;
   PathChain& operator=(const PathChain&) = delete;
 
-  // Starts (or restarts) at x; false when x carries no light.
-  bool start(const Path& x);
+  // Starts (or restarts) at x, estimating f(x) with numbers from rng (again, a few times, when
+  // an estimate comes out 0); false when x carries no light.
+  bool start(const Path& x, Rng& rng);
+  // Resumes at x with the estimate its state kept.
+  void resume(const Path& x, const PathContribution& fx);
   // One step: the proposal's colour with weight a * deposit and the current path's with
   // (1 - a) * deposit go to `film`; the proposal is tallied with `flusher` when given.
   void step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* flusher = nullptr);
   const Path& current() const { return x_; }
+  const PathContribution& currentContribution() const { return fx_; }
   uint64_t rays() const { return context_.rays; }
 
  private:
@@ -53,6 +64,9 @@ class PathChain {
   ManifoldPerturbation manifold_;
   const Mutation* mutations_[kMutationTypes];
   double weights_[kMutationTypes];
+  PathContribution contribution(const Path& x, Rng& rng) const;
+
+  int mediumSamples_, marchSteps_;
   Path x_, y_;
   PathContribution fx_;
   Selection sx_;

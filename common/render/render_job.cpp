@@ -23,6 +23,10 @@ namespace farm {
 
 namespace {
 
+// A seed's contribution as the job reports it: through grids, marched at a step fine enough
+// for a report.
+const TransmittanceEstimator kSeedEstimate{nullptr, 1, 64};
+
 constexpr int kDefaultChains = 64;
 constexpr uint64_t kSampleDomain = 0x5a3b;
 constexpr uint64_t kPathSeedDomain = 0x9a7b;
@@ -162,7 +166,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
       }
       result.seedPaths.push_back(path.serialize());
       result.seedContributions.push_back(
-          std::exp(path.contribution(*scene_, maxDepth).logLuminance));
+          std::exp(path.contribution(*scene_, maxDepth, &kSeedEstimate).logLuminance));
       continue;
     }
     std::vector<float> u;
@@ -207,6 +211,8 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
       if (settings_.algorithm == Algorithm::MLT) {
         s.seedPath = bootstrap.seedPaths[c];
         s.mutationMix = settings_.mutationMix;
+        s.mediumSamples = settings_.mediumSamples;
+        s.mediumMarchSteps = settings_.mediumMarchSteps;
       } else {
         s.seedSample = bootstrap.seedSamples[c];
       }
@@ -307,10 +313,17 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
     m["farm:normalizationStdError"] = formatDouble(bootstrap.normalizationStdError);
     m["farm:bootstrapCandidates"] = std::to_string(bootstrap.candidates);
     m["farm:bootstrapSeconds"] = formatDouble(bootstrap.seconds);
-    if (settings_.algorithm == Algorithm::MLT)
+    if (settings_.algorithm == Algorithm::MLT) {
       m["farm:mutationMix"] = formatMutationMix(settings_.mutationMix);
-    else
+      if (scene_->hasMedia()) {
+        m["farm:mediumTransmittance"] =
+            settings_.mediumMarchSteps > 0
+                ? "marched, " + std::to_string(settings_.mediumMarchSteps) + " steps"
+                : "ratio tracking, mean of " + std::to_string(settings_.mediumSamples);
+      }
+    } else {
       m["farm:largeStepProbability"] = formatDouble(settings_.largeStepProbability);
+    }
   } else {
     m["farm:samples"] = std::to_string(workDone);
     m["farm:samplesPerPixel"] = formatDouble(workDone / pixels);
@@ -346,15 +359,15 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
                              "only): use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
   }
   // Participating media: path tracing and BDPT track them (and the primary-sample-space chains
-  // over them, which draw the same paths); path-space MLT and ERPT, whose paths have no medium
-  // vertices yet, do not.
+  // over them, which draw the same paths), path-space MLT's chains have vertices in them; ERPT,
+  // whose chains would start from path tracing's estimates of f instead of their own, does not.
   bool media = !desc.media.empty();
   for (const ShapeDescription& s : desc.shapes) media = media || s.nullBoundary;
-  if (media && (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
+  if (media && settings.algorithm == Algorithm::ERPT) {
     throw SceneLoadError(path, 0,
                          std::string("participating media are not supported by ") +
                              algorithmName(settings.algorithm) +
-                             " yet: use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
+                             " yet: use pt, bdpt, pssmlt, pssmlt-pt, mmlt or mlt");
   }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);

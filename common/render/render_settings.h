@@ -24,6 +24,11 @@ struct RenderSettings {
   // erptChains chains of erptLength mutations.
   double erptChains = 1;
   int erptLength = 100;
+  // mlt through density grids: f's transmittances are the mean of mediumSamples ratio-tracking
+  // estimates (pseudo-marginal MLT), or, with mediumMarchSteps > 0, marched with that many steps
+  // per segment (deterministic, biased by the step).
+  int mediumSamples = 1;
+  int mediumMarchSteps = 0;
 
   // Empty when the settings are usable, otherwise what is wrong (for the user, one line).
   std::string validate() const;

@@ -188,6 +188,72 @@ Spectrum Medium::marchedTransmittance(const Vec3f& o, const Vec3f& d, float tMax
   return expSpectrum(Spectrum(-float(depth * dt) * sigmaT_.x));
 }
 
+bool Medium::freeFlightChord(const Vec3f& o, const Vec3f& d, FreeFlightChord* chord) const {
+  float t0, t1;
+  if (!clipToGrid(o, d, kInfinity, &t0, &t1)) return false;
+  // Steps of about half a cell: the chord's length in cells of the grid's finest axis.
+  const Vec3f dg = desc_.worldToGrid.applyVector(d);
+  const double cells =
+      double(length(dg)) * (double(t1) - t0) * std::max({desc_.nx, desc_.ny, desc_.nz});
+  chord->t0 = t0;
+  chord->steps = int(std::min(std::max(std::ceil(2 * cells), 8.0), 4096.0));
+  chord->dt = (double(t1) - t0) / chord->steps;
+  return chord->dt > 0;
+}
+
+double Medium::chordSigma(const Vec3f& o, const Vec3f& d, const FreeFlightChord& c, int i) const {
+  return double(sigmaT_.x) * density(o + d * float(c.t0 + (i + 0.5) * c.dt));
+}
+
+float Medium::sampleFreeFlight(const Vec3f& o, const Vec3f& d, float tMax, float uChannel,
+                               float uDistance) const {
+  if (isHomogeneous()) {
+    const float sigma = sigmaT_[std::min(int(uChannel * 3), 2)];
+    const double t = sigma > 0 ? -std::log1p(-double(uDistance)) / sigma : double(kInfinity);
+    return t < tMax ? float(t) : tMax;
+  }
+  FreeFlightChord c;
+  if (!freeFlightChord(o, d, &c)) return tMax;
+  // Inverts the stepped optical depth at -log(1 - u).
+  const double target = -std::log1p(-double(uDistance));
+  double depth = 0;
+  for (int i = 0; i < c.steps; ++i) {
+    const double a = c.t0 + i * c.dt;
+    if (!(a < tMax)) break;
+    const double b = std::min(a + c.dt, double(tMax));
+    const double sigma = chordSigma(o, d, c, i);
+    if (depth + sigma * (b - a) >= target && sigma > 0) {
+      const double t = a + (target - depth) / sigma;
+      return t < tMax ? float(t) : tMax;
+    }
+    depth += sigma * (b - a);
+  }
+  return tMax;
+}
+
+double Medium::freeFlightDensity(const Vec3f& o, const Vec3f& d, float tMax, bool lands) const {
+  if (isHomogeneous()) {
+    double sum = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double pass = std::exp(-double(sigmaT_[c]) * tMax);
+      sum += lands ? double(sigmaT_[c]) * pass : pass;
+    }
+    return sum / 3;
+  }
+  FreeFlightChord c;
+  if (!freeFlightChord(o, d, &c)) return lands ? 0.0 : 1.0;
+  double depth = 0, sigmaAtEnd = 0;
+  for (int i = 0; i < c.steps; ++i) {
+    const double a = c.t0 + i * c.dt;
+    if (!(a < tMax)) break;
+    const double b = std::min(a + c.dt, double(tMax));
+    const double sigma = chordSigma(o, d, c, i);
+    depth += sigma * (b - a);
+    sigmaAtEnd = b == double(tMax) ? sigma : 0.0;
+  }
+  return lands ? sigmaAtEnd * std::exp(-depth) : std::exp(-depth);
+}
+
 std::string mediumProblem(const MediumDescription& desc) {
   if (!finiteNonNegative(desc.sigmaA) || !finiteNonNegative(desc.sigmaS))
     return "sigma_a and sigma_s must be finite and >= 0";

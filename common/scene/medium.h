@@ -55,14 +55,39 @@ class Medium {
   // estimate by ratio tracking (grid), with numbers from `stream`.
   Spectrum transmittance(const Vec3f& o, const Vec3f& d, float tMax, Sampler& sampler,
                          SampleStream stream) const;
-  // The same by ray marching at a fixed step count per unit of the grid (a deterministic and
-  // biased quadrature, for tests at a resolution fine enough to make its error negligible).
+  // The same by ray marching, `steps` midpoint steps over the part of the segment in the grid
+  // (a deterministic and biased quadrature, for a resolution fine enough to make its error
+  // negligible).
   Spectrum marchedTransmittance(const Vec3f& o, const Vec3f& d, float tMax, int steps) const;
+
+  // Path-space MLT's free flights: a proposal of distances whose density is known in closed
+  // form (delta tracking's is the transmittance itself, which a grid does not give). A
+  // homogeneous medium's exponential in one channel picked uniformly with uChannel (the same
+  // mixture as sampleInteraction); in a grid, the exponential of a stepped optical depth: the
+  // extinction at the midpoints of steps of half a cell along the ray's whole chord through
+  // the grid's box (so that the steps are the same whichever end of the segment is sampled, and
+  // close to delta tracking's distribution, where the majorant's exponential would almost never
+  // pass a dense puff that the light does pass). Returns the distance of a vertex in [0, tMax),
+  // or tMax when the flight passes the whole segment.
+  float sampleFreeFlight(const Vec3f& o, const Vec3f& d, float tMax, float uChannel,
+                         float uDistance) const;
+  // Its density: of a vertex at distance tMax (lands), or the probability of passing the whole
+  // segment [0, tMax].
+  double freeFlightDensity(const Vec3f& o, const Vec3f& d, float tMax, bool lands) const;
+  // sigma_s at p: the scattering coefficient a vertex in the medium contributes.
+  Spectrum sigmaS(const Vec3f& p) const { return desc_.sigmaS * density(p); }
 
   // The grid's density at a world point (trilinear; 0 outside); 1 for a homogeneous medium.
   float density(const Vec3f& p) const;
 
  private:
+  // The stepping of a free flight's chord through the grid's box (see sampleFreeFlight).
+  struct FreeFlightChord {
+    double t0 = 0, dt = 0;
+    int steps = 0;
+  };
+  bool freeFlightChord(const Vec3f& o, const Vec3f& d, FreeFlightChord* chord) const;
+  double chordSigma(const Vec3f& o, const Vec3f& d, const FreeFlightChord& chord, int i) const;
   // The part of the segment that lies in the grid's box, as [*t0, *t1]; false when none does.
   bool clipToGrid(const Vec3f& o, const Vec3f& d, float tMax, float* t0, float* t1) const;
   float value(int x, int y, int z) const;

@@ -160,6 +160,60 @@ TEST(Medium, GridDeltaAndRatioTrackingAgreeWithTheMarchedIntegral) {
   }
 }
 
+// Path-space MLT's free flights: the density freeFlightDensity gives is the one
+// sampleFreeFlight draws from, in a homogeneous medium of three extinctions and in the grid
+// (passing: its probability; landing: its integral over each of 12 bins of the segment, by
+// the midpoint rule at 200 points a bin), for a segment that ends inside the grid's box and one
+// that leaves it. Along the same ray from a point further back (a flight that started before a
+// null boundary), the density of the same point is the same: the grid's steps belong to the
+// ray's chord through the box, not to the segment.
+TEST(Medium, FreeFlightDensityIsTheSamplersOwn) {
+  MediumDescription homogeneous;
+  homogeneous.sigmaA = Spectrum(0.2f, 0.5f, 0.0f);
+  homogeneous.sigmaS = Spectrum(0.6f, 1.1f, 0.3f);
+  const Medium media[2] = {Medium(homogeneous), Medium(gridDescription(true))};
+  const Vec3f o(-2.0f, 0.1f, 0.3f), d = normalize(Vec3f(1.0f, 0.2f, 0.4f));
+  for (const Medium& medium : media) {
+    for (float L : {2.5f, 4.5f}) {
+      const std::string what =
+          std::string(medium.isHomogeneous() ? "homogeneous" : "grid") + ", L " + std::to_string(L);
+      constexpr int kBins = 12, kSamples = 400000;
+      std::vector<Accumulator> bins(kBins);
+      Accumulator passed;
+      Rng rng(9, 2);
+      for (int i = 0; i < kSamples; ++i) {
+        const float t = medium.sampleFreeFlight(o, d, L, rng.nextFloat(), rng.nextFloat());
+        ASSERT_GE(t, 0.0f);
+        ASSERT_LE(t, L);
+        passed.add(t >= L ? 1.0 : 0.0);
+        const int bin = t >= L ? -1 : std::min(int(t / L * kBins), kBins - 1);
+        for (int b = 0; b < kBins; ++b) bins[size_t(b)].add(b == bin ? 1.0 : 0.0);
+      }
+      expectWithin(passed.estimate(), medium.freeFlightDensity(o, d, L, false), what + " passing");
+      double total = medium.freeFlightDensity(o, d, L, false);
+      for (int b = 0; b < kBins; ++b) {
+        double integral = 0;
+        const double width = double(L) / kBins;
+        for (int j = 0; j < 200; ++j) {
+          const float t = float((b + (j + 0.5) / 200) * width);
+          integral += medium.freeFlightDensity(o, d, t, true) * width / 200;
+        }
+        total += integral;
+        expectWithin(bins[size_t(b)].estimate(), integral, what + " bin " + std::to_string(b));
+      }
+      EXPECT_NEAR(total, 1.0, 2e-3) << what << ": the densities integrate to one";
+    }
+  }
+  const Medium& grid = media[1];
+  for (float t : {2.2f, 2.9f, 3.4f}) {
+    const float back = 0.7f;
+    EXPECT_NEAR(grid.freeFlightDensity(o - d * back, d, t + back, true) /
+                    grid.freeFlightDensity(o - d * back, d, back, false),
+                grid.freeFlightDensity(o, d, t, true), 1e-4 * grid.freeFlightDensity(o, d, t, true))
+        << "at " << t;
+  }
+}
+
 TEST(Medium, GridDensityInterpolatesItsSamples) {
   MediumDescription desc = gridDescription(false);
   const Medium corner(desc);

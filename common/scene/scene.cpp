@@ -456,10 +456,8 @@ int Scene::mediumAt(const Vec3f& p) const {
   return -1;
 }
 
-Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end,
-                                   const Vec3f* rayEnd, int medium, Sampler& sampler,
-                                   SampleStream stream) const {
-  Spectrum T(1.0f);
+bool Scene::walkMedia(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end, const Vec3f* rayEnd,
+                      int medium, const SegmentVisitor& visit, int* arrival) const {
   // Each pass crosses one null boundary; a cap keeps a degenerate stack of them finite. The
   // rays start off the surfaces (o, rayEnd) and aim at rayEnd itself, as visible()'s does: a
   // ray along the unoffset points' direction would pass an offset's width beside rayEnd and
@@ -470,7 +468,10 @@ Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* e
     if (rayEnd) {
       const Vec3f toEnd = *rayEnd - o;
       r.tMax = farm::length(toEnd);
-      if (!(r.tMax > 0)) return T;
+      if (!(r.tMax > 0)) {
+        if (arrival) *arrival = medium;
+        return true;
+      }
       r.d = d = toEnd / r.tMax;
     }
     SurfaceHit hit;
@@ -478,15 +479,48 @@ Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* e
     if (medium >= 0) {
       const float length =
           found ? farm::length(hit.p - start) : (end ? farm::length(*end - start) : kInfinity);
-      T *= media_[size_t(medium)].transmittance(start, d, length, sampler, stream);
+      if (!visit(MediumSegment{medium, start, d, length})) return false;
     }
-    if (!found) return T;
-    if (!desc_.shapes[size_t(hit.shape)].nullBoundary || isBlack(T)) return Spectrum(0.0f);
+    if (!found) {
+      if (arrival) *arrival = medium;
+      return true;
+    }
+    if (!desc_.shapes[size_t(hit.shape)].nullBoundary) return false;
     medium = mediumOnSide(hit.shape, hit.ng, d, medium);
     start = hit.p;
     o = spawnRay(hit.p, hit.ng, d).o;
   }
-  return Spectrum(0.0f);
+  return false;
+}
+
+Spectrum Scene::transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end,
+                                   const Vec3f* rayEnd, int medium, Sampler& sampler,
+                                   SampleStream stream) const {
+  Spectrum T(1.0f);
+  const bool reached = walkMedia(
+      start, o, d, end, rayEnd, medium,
+      [&](const MediumSegment& s) {
+        T *= media_[size_t(s.medium)].transmittance(s.start, s.d, s.length, sampler, stream);
+        return !isBlack(T);
+      },
+      nullptr);
+  return reached ? T : Spectrum(0.0f);
+}
+
+bool Scene::mediumSegments(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1,
+                           int medium, std::vector<MediumSegment>* segments, int* arrival) const {
+  segments->clear();
+  const Vec3f d = p1 - p0;
+  if (!(lengthSquared(d) > 0)) return false;
+  Vec3f o, e;
+  offsetEnds(p0, n0, p1, n1, &o, &e);
+  return walkMedia(
+      p0, o, normalize(d), &p1, &e, medium,
+      [&](const MediumSegment& s) {
+        segments->push_back(s);
+        return true;
+      },
+      arrival);
 }
 
 Spectrum Scene::transmittance(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1,

@@ -1,6 +1,7 @@
 #pragma once
 // The renderer's scene: the description turned into Embree geometry, BSDFs, area lights and the
 // camera. Read-only after construction and shared by all threads of a process.
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -13,6 +14,13 @@
 #include "common/scene/scene_description.h"
 
 namespace farm {
+
+// A stretch of a segment that lies in one medium: from `start` along unit d for `length`.
+struct MediumSegment {
+  int medium = -1;
+  Vec3f start, d;
+  float length = 0;
+};
 
 struct SurfaceHit {
   Vec3f p;   // on the surface (re-projected for accuracy)
@@ -174,10 +182,22 @@ class Scene {
   // The same for the ray from p in direction w out of the scene (to the environment).
   Spectrum transmittanceToInfinity(const Vec3f& p, const Vec3f& n, const Vec3f& w, int medium,
                                    Sampler& sampler, SampleStream stream) const;
+  // The stretches of the segment p0 - p1 that lie in media, from p0 on, as transmittance()
+  // walks it (through null boundaries, starting in `medium`): false when another surface
+  // blocks the segment (or it has no length). *arrival: the medium the walk ends in at p1.
+  // Path-space MLT evaluates its transmittances and free-flight densities over these.
+  bool mediumSegments(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1,
+                      int medium, std::vector<MediumSegment>* segments, int* arrival) const;
 
  private:
-  // transmittance()'s walk along unit d from surface point `start` (its ray from o, offset off
-  // the surface) to `end` (its ray to rayEnd), or to infinity when they are null.
+  // The walk along unit d from surface point `start` (its ray from o, offset off the surface)
+  // to `end` (its ray to rayEnd), or to infinity when they are null, handing each stretch in a
+  // medium to `visit` (which returns false to stop the walk there). True when the walk reached
+  // the end, with *arrival (when not null) the medium it ended in.
+  using SegmentVisitor = std::function<bool(const MediumSegment&)>;
+  bool walkMedia(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end, const Vec3f* rayEnd, int medium,
+                 const SegmentVisitor& visit, int* arrival) const;
+  // transmittance()'s walk.
   Spectrum transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end, const Vec3f* rayEnd,
                               int medium, Sampler& sampler, SampleStream stream) const;
 

@@ -53,7 +53,7 @@ class ScaledProduct {
   bool ok_ = true;
 };
 
-constexpr uint32_t kPathMagic = 0x33485450;  // "PTH3": with texture coordinates and triangles
+constexpr uint32_t kPathMagic = 0x34485450;  // "PTH4": with texture coordinates, triangles, media
 
 }  // namespace
 
@@ -74,18 +74,45 @@ bool Path::isSpecular(const Scene& scene, int i) const {
   return v.kind == PathVertex::Kind::Surface && v.shape >= 0 && scene.bsdfOf(v.shape).isDelta();
 }
 
-PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
+PathContribution Path::contribution(const Scene& scene, int maxDepth,
+                                    const TransmittanceEstimator* estimator) const {
   PathContribution out;
   const int k = length();
   if (k < 1 || (maxDepth >= 0 && k > maxDepth)) return out;
   const PathVertex& x0 = vertices[0];
   const PathVertex& camera = vertices[size_t(k)];
   if (x0.light < 0 || camera.kind != PathVertex::Kind::Camera) return out;
+  const bool media = scene.hasMedia();
   for (int i = 1; i < k; ++i) {
-    if (vertices[size_t(i)].kind != PathVertex::Kind::Surface) return out;
+    const PathVertex::Kind kind = vertices[size_t(i)].kind;
+    if (kind != PathVertex::Kind::Surface && !(media && kind == PathVertex::Kind::Medium))
+      return out;
   }
 
   ScaledProduct f;
+  // The media: each edge's transmittance, and the medium each vertex in one lies in.
+  PathMedia walk;
+  const TransmittanceEstimator marched{nullptr, 1, kDefaultMarchSteps};
+  const TransmittanceEstimator& e = estimator ? *estimator : marched;
+  if (media && e.marchSteps >= 0) {
+    if (!this->media(scene, &walk)) return out;
+    for (const PathMedia::Edge& edge : walk.edges) {
+      for (const MediumSegment& seg : edge.segments) {
+        const Medium& medium = scene.medium(seg.medium);
+        if (medium.isHomogeneous() || e.marchSteps > 0 || !e.rng) {
+          f.multiply(medium.marchedTransmittance(
+              seg.start, seg.d, seg.length, e.marchSteps > 0 ? e.marchSteps : kDefaultMarchSteps));
+        } else {
+          IndependentSampler sampler(e.rng);
+          Spectrum sum(0.0f);
+          const int n = std::max(e.samples, 1);
+          for (int j = 0; j < n; ++j)
+            sum += medium.transmittance(seg.start, seg.d, seg.length, sampler, kLightStream);
+          f.multiply(sum / float(n));
+        }
+      }
+    }
+  }
   // The unit direction between two vertices and their squared distance; an edge from the
   // environment has no distance (nor a sender's cosine): its x_0 is measured by direction, so
   // that G(x_0, x_1) is x_1's cosine alone.
@@ -102,7 +129,9 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
   // A point light has no cosine either (its intensity is per solid angle), and no camera sees
   // it: a path of one edge from it carries nothing.
   auto senderCosine = [&](const PathVertex& sender, const Vec3f& w) {
-    return atInfinity(sender) || onPointLight(sender) ? 1.0 : double(absDot(sender.n, w));
+    return atInfinity(sender) || onPointLight(sender) || inMedium(sender)
+               ? 1.0
+               : double(absDot(sender.n, w));
   };
   if (k == 1 && onPointLight(x0)) return out;
   // Emission towards x_1.
@@ -119,7 +148,17 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
     double d2Next;
     const Vec3f wo = direction(i + 1, i + 2, &d2Next);  // towards the camera
     const Vec3f wi = -w;                                // towards the light
-    if (!(d2Next > 0) || !sidesAgree(wi, v.n, v.ns) || !sidesAgree(wo, v.n, v.ns)) return out;
+    if (!(d2Next > 0)) return out;
+    if (inMedium(v)) {
+      // sigma_s times the phase function (a density per solid angle: no cosine).
+      const int m = walk.edges.empty() ? v.medium : walk.edges[size_t(i + 1)].to;
+      if (m < 0) return out;
+      const Medium& medium = scene.medium(m);
+      f.multiply(medium.sigmaS(v.p));
+      f.multiply(double(medium.phase().eval(wo, wi)));
+      continue;
+    }
+    if (!sidesAgree(wi, v.n, v.ns) || !sidesAgree(wo, v.n, v.ns)) return out;
     const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
     Frame frame(v.ns);
     Vec3f lo = frame.toLocal(wo), li = frame.toLocal(wi);
@@ -149,6 +188,44 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth) const {
   return out;
 }
 
+bool Path::media(const Scene& scene, PathMedia* out) const {
+  const int k = length();
+  out->edges.assign(size_t(std::max(k, 0)), PathMedia::Edge());
+  int around = scene.cameraMedium();  // the medium around x_{i+1}
+  for (int i = k - 1; i >= 0; --i) {
+    const PathVertex &a = vertices[size_t(i + 1)], &b = vertices[size_t(i)];
+    PathMedia::Edge& edge = out->edges[size_t(i)];
+    edge.from = a.kind == PathVertex::Kind::Surface
+                    ? scene.mediumOnSide(a.shape, a.n, b.p - a.p, around)
+                    : around;
+    if (!scene.mediumSegments(a.p, a.n, b.p, b.n, edge.from, &edge.segments, &edge.to))
+      return false;
+    if (inMedium(b) && edge.to < 0) return false;
+    around = edge.to;
+  }
+  return true;
+}
+
+double Path::freeFlightDensity(const Scene& scene, const PathMedia& media, int j,
+                               bool fromLight) const {
+  // The edge it flies along, with the stretches in the order of the flight.
+  const PathMedia::Edge& edge = media.edges[size_t(fromLight ? j - 1 : j)];
+  const int n = int(edge.segments.size());
+  const bool lands = inMedium(vertices[size_t(j)]);
+  if (n == 0) return lands ? 0.0 : 1.0;
+  double p = 1;
+  for (int q = 0; q < n; ++q) {
+    // Stretches run from x_{j} (fromLight) or towards it (from the camera side).
+    const MediumSegment& s = edge.segments[size_t(fromLight ? n - 1 - q : q)];
+    const bool last = q == n - 1;
+    // The flight's own direction: the reverse of the stretch's when flying from the light.
+    const Vec3f o = fromLight ? s.start + s.d * s.length : s.start;
+    const Vec3f d = fromLight ? -s.d : s.d;
+    p *= scene.medium(s.medium).freeFlightDensity(o, d, s.length, last && lands);
+  }
+  return p;
+}
+
 void Path::densities(const Scene& scene, double* pL, double* pE, char* delta) const {
   std::vector<const PathVertex*> pointers;
   pointers.reserve(vertices.size());
@@ -167,6 +244,7 @@ std::string Path::serialize() const {
     appendBytes(s, int32_t(v.shape));
     appendBytes(s, int32_t(v.light));
     appendBytes(s, int32_t(v.primitive));
+    appendBytes(s, int32_t(v.medium));
   }
   return s;
 }
@@ -176,7 +254,7 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
   uint32_t magic, count;
   if (!readBytes(bytes, at, &magic) || magic != kPathMagic || !readBytes(bytes, at, &count))
     return false;
-  constexpr size_t kVertexBytes = 1 + 11 * sizeof(float) + 3 * sizeof(int32_t);
+  constexpr size_t kVertexBytes = 1 + 11 * sizeof(float) + 4 * sizeof(int32_t);
   if (count < 2 || count > (bytes.size() - at) / kVertexBytes) return false;
   const int shapes = int(scene.description().shapes.size());
   const int lights = int(scene.lights().size());
@@ -184,23 +262,31 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
   for (uint32_t i = 0; i < count; ++i) {
     PathVertex& v = read[i];
     uint8_t kind;
-    int32_t shape, light, primitive;
+    int32_t shape, light, primitive, medium;
     if (!readBytes(bytes, at, &kind) || !readBytes(bytes, at, &v.p) ||
         !readBytes(bytes, at, &v.n) || !readBytes(bytes, at, &v.ns) ||
         !readBytes(bytes, at, &v.uv) || !readBytes(bytes, at, &shape) ||
-        !readBytes(bytes, at, &light) || !readBytes(bytes, at, &primitive))
+        !readBytes(bytes, at, &light) || !readBytes(bytes, at, &primitive) ||
+        !readBytes(bytes, at, &medium))
       return false;
-    if (kind > uint8_t(PathVertex::Kind::Surface)) return false;
+    if (kind > uint8_t(PathVertex::Kind::Medium)) return false;
     v.kind = PathVertex::Kind(kind);
     v.shape = shape;
     v.light = light;
     v.primitive = primitive;
+    v.medium = medium;
     if (!isFinite(v.p) || !isFinite(v.n) || !isFinite(v.ns) || !std::isfinite(v.uv.x) ||
         !std::isfinite(v.uv.y))
       return false;
+    if (medium < -1 || medium >= int(scene.description().media.size())) return false;
     const bool isCamera = v.kind == PathVertex::Kind::Camera;
     if (isCamera != (i + 1 == count)) return false;  // the camera, and only it, ends the path
-    if (!isCamera && shape == -1 && i == 0 && v.kind == PathVertex::Kind::Light) {
+    if (inMedium(v)) {
+      // A scattering point inside a medium: no surface, no normals, never an end.
+      if (i == 0 || medium < 0 || shape != -1 || light != -1 || primitive != -1 ||
+          lengthSquared(v.n) != 0 || lengthSquared(v.ns) != 0)
+        return false;
+    } else if (!isCamera && shape == -1 && i == 0 && v.kind == PathVertex::Kind::Light) {
       // A point light's position (it has no shape).
       if (light < 0 || light >= lights || !scene.lights()[size_t(light)].isPoint() ||
           primitive != -1)

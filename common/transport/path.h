@@ -18,11 +18,45 @@
 #include <string>
 #include <vector>
 
+#include "common/sampling/rng.h"
+#include "common/scene/scene.h"
 #include "common/transport/path_vertex.h"
 
 namespace farm {
 
-class Scene;
+// How Path::contribution estimates the transmittance of edges through density grids
+// (homogeneous media are exact): the mean of `samples` ratio-tracking estimates with numbers
+// from rng, a non-negative unbiased estimate (pseudo-marginal MLT, Kronander et al. 2015,
+// section 3.3), or, with marchSteps > 0, ray marching (deterministic, biased by its step);
+// marchSteps < 0: none at all (see kCarriesLightCheck).
+struct TransmittanceEstimator {
+  Rng* rng = nullptr;
+  int samples = 1;
+  int marchSteps = 0;
+};
+// The estimator of a contribution given none: marching, fine enough for a grid of 256 cells
+// along a ray, so that whether a path carries light is a property of the path alone.
+constexpr int kDefaultMarchSteps = 1024;
+// For checks of a path that its builder saw unblocked and need no value (whether it projects
+// onto the film, its lobes exist, ...): marchSteps < 0 leaves the transmittances out (each
+// vertex in a medium takes the medium it names), and no ray is traced.
+inline const TransmittanceEstimator kCarriesLightCheck{nullptr, 1, -1};
+
+// The media along a path's edges, walked from the camera (in the medium the scene puts it)
+// towards the light as Scene::mediumSegments walks them. Edge i joins x_i and x_{i+1}: it
+// leaves x_{i+1} in medium `from` and reaches x_i in medium `to`, its stretches in media
+// ordered from x_{i+1}.
+struct PathMedia {
+  struct Edge {
+    int from = -1, to = -1;
+    std::vector<MediumSegment> segments;
+  };
+  std::vector<Edge> edges;
+  // The medium around x_i (on the side of its edge towards the camera), -1 for vacuum.
+  int around(const Scene& scene, int i) const {
+    return i == int(edges.size()) ? scene.cameraMedium() : edges[size_t(i)].to;
+  }
+};
 
 struct PathContribution {
   // log of the luminance of f(x); -infinity when f(x) = 0 (or the path is not one the target
@@ -47,7 +81,20 @@ class Path {
   // f(x) as above, in a form that neither overflows nor underflows (a running product
   // renormalized at every factor). Does not test visibility: whoever builds an edge tests it.
   // maxDepth: longest path in edges the target allows (< 0: unbounded).
-  PathContribution contribution(const Scene& scene, int maxDepth) const;
+  // In a scene with media, the edges' transmittances (through null boundaries) and the vertices
+  // in media (sigma_s times the phase function, no cosines) enter f, the grids' by `estimator`
+  // (nullptr: kDefaultMarchSteps of marching).
+  PathContribution contribution(const Scene& scene, int maxDepth,
+                                const TransmittanceEstimator* estimator = nullptr) const;
+
+  // The media along the edges (see PathMedia); false when an edge is blocked or a vertex in a
+  // medium lies outside every medium.
+  bool media(const Scene& scene, PathMedia* out) const;
+  // The density of the free flight (Medium::sampleFreeFlight, through every medium on the way)
+  // that puts x_j where it is, flying from its neighbour towards the light (fromLight: x_{j-1})
+  // or towards the camera (x_{j+1}): the probability of passing the media, times the landing
+  // density where x_j lies in a medium. 1 along an edge without media.
+  double freeFlightDensity(const Scene& scene, const PathMedia& media, int j, bool fromLight) const;
 
   // Whether x_i scatters only through Dirac lobes (a specular vertex).
   bool isSpecular(const Scene& scene, int i) const;

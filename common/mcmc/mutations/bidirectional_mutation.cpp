@@ -70,13 +70,22 @@ int sampleDiscrete(const std::vector<double>& weights, double total, Rng& rng) {
   return 0;
 }
 
-// One step of a random walk: the vertex after `at` (which was reached from `from`), its
-// direction sampled by the BSDF at `at` in the given transport mode.
+// One step of a random walk: the vertex after `at` (which was reached from `from`, and lies in
+// medium `around`), its direction sampled by the BSDF at `at` in the given transport mode, or
+// by the phase function of the medium `at` lies in.
 bool scatterStep(const MutationContext& context, const PathVertex& at, const PathVertex& from,
-                 TransportMode mode, Rng& rng, PathVertex* next) {
+                 int around, TransportMode mode, Rng& rng, PathVertex* next) {
   const Scene& scene = context.scene;
-  const Bsdf& bsdf = scene.bsdfAt(at.shape, at.uv);
+  if (!(lengthSquared(from.p - at.p) > 0)) return false;
   Vec3f woWorld = normalize(from.p - at.p);
+  if (inMedium(at)) {
+    float pdf;
+    const Vec3f w = scene.medium(at.medium).phase().sample(
+        woWorld, Vec2f(rng.nextFloat(), rng.nextFloat()), &pdf);
+    if (!(pdf > 0)) return false;
+    return flyVertex(context, at, at.medium, w, rng, next);
+  }
+  const Bsdf& bsdf = scene.bsdfAt(at.shape, at.uv);
   if (bsdf.isBlack() || !sidesAgree(woWorld, at.n, at.ns)) return false;
   Frame frame(at.ns);
   float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
@@ -84,7 +93,7 @@ bool scatterStep(const MutationContext& context, const PathVertex& at, const Pat
   if (!bsdf.sample(frame.toLocal(woWorld), u, mode, &bs)) return false;
   Vec3f w = normalize(frame.toWorld(bs.wi));
   if (!sidesAgree(w, at.n, at.ns)) return false;
-  return traceVertex(context, at, w, next);
+  return flyVertex(context, at, mediumLeaving(scene, at, w, around), w, rng, next);
 }
 
 }  // namespace
@@ -112,6 +121,12 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
   const int sLight = std::min(int(rng.nextDouble() * (na + 1)), na);
   const int tCamera = na - sLight;
   *record = {MutationType::Bidirectional, L, E, nd, na};
+  // The media around the kept ends, from x's walk (none without media).
+  PathMedia xMedia;
+  const bool media = scene.hasMedia();
+  if (media && !x.media(scene, &xMedia)) return false;
+  auto aroundKept = [&](int i) { return media ? xMedia.around(scene, i) : -1; };
+  auto arrived = [&](const PathVertex& v) { return media ? v.medium : -1; };
 
   // The light side: the kept prefix, then s' vertices by light sampling, emission and BSDFs.
   y->vertices.assign(x.vertices.begin(), x.vertices.begin() + L);
@@ -140,9 +155,16 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
         if (!(local.z != 0)) return false;
         w = normalize(Frame(source.n).toWorld(local));
       }
-      if (!traceVertex(context_, source, w, &v)) return false;
+      // The medium around the light: its shape's side, or where it sits (as BDPT's light
+      // subpaths start), when the light itself was kept; the kept path's otherwise.
+      const int around = L == 0 ? scene.mediumAt(source.p) : aroundKept(0);
+      if (!flyVertex(context_, source, media ? mediumLeaving(scene, source, w, around) : -1, w, rng,
+                     &v))
+        return false;
     } else {
-      if (!scatterStep(context_, y->vertices[size_t(index - 1)], y->vertices[size_t(index - 2)],
+      const PathVertex& at = y->vertices[size_t(index - 1)];
+      const int around = index - 1 < L ? aroundKept(index - 1) : arrived(at);
+      if (!scatterStep(context_, at, y->vertices[size_t(index - 2)], around,
                        TransportMode::Importance, rng, &v))
         return false;
     }
@@ -157,13 +179,16 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
     if (at.kind == PathVertex::Kind::Camera) {
       const Camera& camera = scene.camera();
       Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
-      if (!traceVertex(context_, at, camera.generateRay(film, at.p).d, &v)) return false;
+      if (!flyVertex(context_, at, media ? scene.cameraMedium() : -1,
+                     camera.generateRay(film, at.p).d, rng, &v))
+        return false;
     } else {
       // Growing past the light (nothing deleted, the whole path kept on this side): a point light
       // has no surface to scatter from.
       if (onPointLight(at)) return false;
       const PathVertex& from = j == 0 ? suffix(1) : (j == 1 ? suffix(0) : grown[size_t(j - 2)]);
-      if (!scatterStep(context_, at, from, TransportMode::Radiance, rng, &v)) return false;
+      const int around = j == 0 ? aroundKept(n - E) : arrived(at);
+      if (!scatterStep(context_, at, from, around, TransportMode::Radiance, rng, &v)) return false;
     }
     grown.push_back(v);
   }
@@ -190,6 +215,16 @@ double BidirectionalMutation::logDensity(const Path& from, const Path& to,
   std::vector<double> pL(size_t(nTo), 0.0), pE(size_t(nTo), 0.0);
   std::vector<char> delta(size_t(nTo), 0);
   to.densities(scene, pL.data(), pE.data(), delta.data());
+  // In media, each new vertex's free flight from the side that grew it (the light vertex
+  // itself is sampled on its light, without one).
+  if (scene.hasMedia()) {
+    PathMedia media;
+    if (!to.media(scene, &media)) return -INFINITY;
+    for (int j = r.keptLight; j < r.keptLight + r.added; ++j) {
+      if (j > 0) pL[size_t(j)] *= to.freeFlightDensity(scene, media, j, true);
+      pE[size_t(j)] *= to.freeFlightDensity(scene, media, j, false);
+    }
+  }
   // Sum over the splits that could have grown the new vertices, in logarithms.
   double best = -INFINITY;
   std::vector<double> terms;

@@ -40,12 +40,14 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
   Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
   Vec3f w = camera.generateRay(film, eye.p).d;
   PathVertex previous = eye;
+  int medium = scene.hasMedia() ? scene.cameraMedium() : -1;  // the flight's
   for (;;) {
     PathVertex v;
-    if (!traceVertex(context_, previous, w, &v)) return false;
+    if (!flyVertex(context_, previous, medium, w, rng, &v)) return false;
     walk.push_back(v);
     const int length = m + int(walk.size());  // edges of the path this would make
     if (context_.maxDepth >= 0 && length > context_.maxDepth) return false;
+    if (inMedium(v)) break;  // a vertex in a medium is not specular
     const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
     if (!bsdf.isDelta()) break;
     if (int(walk.size()) > kMaxSpecularChain) return false;
@@ -57,6 +59,7 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
     if (!bsdf.sample(frame.toLocal(wo), u, TransportMode::Radiance, &bs)) return false;
     w = normalize(frame.toWorld(bs.wi));
     if (!sidesAgree(w, v.n, v.ns)) return false;
+    if (scene.hasMedia()) medium = mediumLeaving(scene, v, w, v.medium);
     previous = v;
   }
   y->vertices.assign(x.vertices.begin(), x.vertices.begin() + m);
@@ -79,10 +82,15 @@ double LensSubpathMutation::logDensity(const Path& from, const Path& to,
   std::vector<double> pL(size_t(nTo), 0.0), pE(size_t(nTo), 0.0);
   std::vector<char> delta(size_t(nTo), 0);
   to.densities(scene, pL.data(), pE.data(), delta.data());
+  PathMedia media;
+  if (scene.hasMedia() && !to.media(scene, &media)) return -INFINITY;
   double logT = 0;
   for (int j = r.keptLight; j <= nTo - 2; ++j) {
-    if (!(pE[size_t(j)] > 0)) return -INFINITY;
-    logT += std::log(pE[size_t(j)]);
+    // Each vertex's free flight from the camera's side, in media.
+    const double p =
+        pE[size_t(j)] * (scene.hasMedia() ? to.freeFlightDensity(scene, media, j, false) : 1.0);
+    if (!(p > 0)) return -INFINITY;
+    logT += std::log(p);
   }
   return logT;
 }

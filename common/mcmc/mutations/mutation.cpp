@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "common/scene/scene.h"
 
@@ -29,24 +30,68 @@ bool traceVertex(const MutationContext& context, const PathVertex& from, const V
                  PathVertex* hit) {
   const Scene& scene = context.scene;
   Ray ray = scene.spawnRay(from.p, from.n, w);
-  ++context.rays;
-  SurfaceHit h;
-  if (!scene.intersect(ray, &h)) return false;
-  *hit = PathVertex();
-  hit->kind = PathVertex::Kind::Surface;
-  hit->p = h.p;
-  hit->n = h.ng;
-  hit->ns = h.ns;
-  hit->uv = h.uv;
-  hit->shape = h.shape;
-  hit->primitive = int(h.primitive);
-  hit->light = scene.lightOf(h.shape);
-  return true;
+  for (int crossing = 0; crossing < 1024; ++crossing) {
+    ++context.rays;
+    SurfaceHit h;
+    if (!scene.intersect(ray, &h)) return false;
+    if (scene.hasMedia() && scene.isNullBoundary(h.shape)) {
+      ray = scene.spawnRay(h.p, h.ng, w);
+      continue;
+    }
+    *hit = surfaceVertex(scene, h);
+    return true;
+  }
+  return false;
+}
+
+bool flyVertex(const MutationContext& context, const PathVertex& from, int medium, const Vec3f& w,
+               Rng& rng, PathVertex* hit) {
+  const Scene& scene = context.scene;
+  if (!scene.hasMedia()) return traceVertex(context, from, w, hit);
+  if (!isFinite(w)) return false;
+  Ray ray = scene.spawnRay(from.p, from.n, w);
+  Vec3f start = from.p;  // where the stretch in the current medium begins
+  for (int crossing = 0; crossing < 1024; ++crossing) {
+    ++context.rays;
+    SurfaceHit h;
+    const bool found = scene.intersect(ray, &h);
+    if (medium >= 0) {
+      const float length = found ? farm::length(h.p - start) : kInfinity;
+      const float uChannel = rng.nextFloat(), uDistance = rng.nextFloat();
+      const float t = scene.medium(medium).sampleFreeFlight(start, w, length, uChannel, uDistance);
+      // (A vertex on its predecessor, at t = 0 after rounding, would leave no direction.)
+      if (t < length && t > 0) {
+        *hit = PathVertex();
+        hit->kind = PathVertex::Kind::Medium;
+        hit->p = start + w * t;
+        hit->medium = medium;
+        return true;
+      }
+    }
+    if (!found) return false;
+    if (!scene.isNullBoundary(h.shape)) {
+      *hit = surfaceVertex(scene, h);
+      hit->medium = medium;
+      return true;
+    }
+    medium = scene.mediumOnSide(h.shape, h.ng, w, medium);
+    start = h.p;
+    ray = scene.spawnRay(h.p, h.ng, w);
+  }
+  return false;
+}
+
+int mediumLeaving(const Scene& scene, const PathVertex& v, const Vec3f& w, int around) {
+  return v.shape >= 0 ? scene.mediumOnSide(v.shape, v.n, w, around) : around;
 }
 
 bool connectVertices(const MutationContext& context, const PathVertex& a, const PathVertex& b) {
   ++context.rays;
-  return context.scene.visible(a.p, a.n, b.p, b.n);
+  const Scene& scene = context.scene;
+  if (!scene.hasMedia()) return scene.visible(a.p, a.n, b.p, b.n);
+  std::vector<MediumSegment> segments;
+  int arrival;
+  return scene.mediumSegments(a.p, a.n, b.p, b.n, -1, &segments, &arrival);
 }
 
 int firstNonSpecularFromCamera(const Scene& scene, const Path& x) {

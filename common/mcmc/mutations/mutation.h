@@ -73,11 +73,23 @@ class Mutation {
 
 // --- Helpers the mutations share -------------------------------------------------------------
 
-// The surface the ray from vertex `from` in direction w hits first, as a path vertex; false when
-// the ray leaves the scene. Counts the ray.
+// The surface the ray from vertex `from` in direction w hits first (passing null boundaries,
+// which only bound media), as a path vertex; false when the ray leaves the scene. Counts the
+// rays. The perturbations move surface vertices by it: their proposals ignore media, which
+// enter only f.
 bool traceVertex(const MutationContext& context, const PathVertex& from, const Vec3f& w,
                  PathVertex* hit);
-// Whether the segment between two vertices is unoccluded. Counts the ray.
+// The vertex that a flight from `from` in direction w reaches: the first surface, or a vertex
+// in a medium where Medium::sampleFreeFlight lands one in a medium on the way (the flight
+// starting in `medium`, changing medium at null boundaries); the vertex's `medium` is the one
+// it arrived in. Path::freeFlightDensity gives its density. Without media, traceVertex.
+bool flyVertex(const MutationContext& context, const PathVertex& from, int medium, const Vec3f& w,
+               Rng& rng, PathVertex* hit);
+// The medium that a path leaving v in direction w starts in, `around` being the medium around
+// v (on either side of a surface without a medium interface).
+int mediumLeaving(const Scene& scene, const PathVertex& v, const Vec3f& w, int around);
+// Whether the segment between two vertices is unoccluded (null boundaries let it through).
+// Counts the ray.
 bool connectVertices(const MutationContext& context, const PathVertex& a, const PathVertex& b);
 
 // Lens subpath of x: the index m of the first vertex, counting from the camera, that is not

@@ -72,7 +72,7 @@ struct Estimate {
 
 // --- The bidirectional mutation against BDPT, path length by path length --------------------
 
-void expectPathLengthIntegrals(const std::string& file, int lengths) {
+void expectPathLengthIntegrals(const std::string& file, int lengths, int proposalCount = 1 << 19) {
   auto scene = load(file, 24);
   const int maxDepth = maxDepthOf(*scene);
   // BDPT: per sample, the luminance its strategies carry, by path length.
@@ -94,7 +94,7 @@ void expectPathLengthIntegrals(const std::string& file, int lengths) {
   MutationContext context{*scene, maxDepth};
   BidirectionalMutation mutation(context);
   const Path x = findPath(*scene, maxDepth, [](const Path& p) { return p.length() == 2; });
-  const int proposals = 1 << 19;
+  const int proposals = proposalCount;
   const int tasks = 64;
   std::vector<std::vector<double>> sum(tasks, std::vector<double>(lengths + 1, 0.0)), sumSq = sum;
   tbb::parallel_for(0, tasks, [&](int task) {
@@ -163,6 +163,14 @@ TEST(BidirectionalMutationDensity, RegrowsPathsFromPointAndTwoSidedLights) {
   expectPathLengthIntegrals(twoSided, 4);
   std::filesystem::remove(spot);
   std::filesystem::remove(twoSided);
+}
+
+// Vertices in media: the smoke room of tests/data (fog below, a grid of smoke filling the room
+// above it, so that regrown paths scatter in both), where BDPT's integrals over each path length
+// are its own estimates through the media (which path tracing's check) and the mutation's are
+// E[f / T] with its free flights' densities in T and the transmittances (marched finely) in f.
+TEST(BidirectionalMutationDensity, RegrowsPathsWithVerticesInMedia) {
+  expectPathLengthIntegrals(std::string(FARM_TEST_DATA_DIR) + "/smoke-room/scene.xml", 4, 1 << 21);
 }
 
 // --- The perturbations integrate to one -------------------------------------------------------
