@@ -243,7 +243,13 @@ INSTANTIATE_TEST_SUITE_P(
                       ClusterCase{"mmlt",
                                   {"--mpp", "128"},
                                   std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml",
-                                  "mmlt_smoky_box_media"}),
+                                  "mmlt_smoky_box_media"},
+                      // pseudo-marginal path-space chains through a grid of smoke: their
+                      // estimate count travels to the workers, their states keep f's estimate
+                      ClusterCase{"mlt",
+                                  {"--mpp", "64", "--medium-samples", "2"},
+                                  std::string(FARM_TEST_DATA_DIR) + "/smoke-room/scene.xml",
+                                  "mlt_smoke_room_pseudo_marginal"}),
     [](const auto& info) {
       return info.param.name.empty() ? info.param.algorithm : info.param.name;
     });
