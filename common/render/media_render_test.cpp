@@ -1,18 +1,28 @@
 // Participating media through the whole render: the smoky room of tests/data (fog, tinted water
-// in glass, a puff of smoke from a grid file) loads, and path tracing, BDPT and the
-// primary-sample-space chains over them agree on it within their variance; the algorithms that
-// do not track media yet refuse it with a message that names the ones that do.
+// in glass, a puff of smoke from a grid file) loads, and path tracing, BDPT, the
+// primary-sample-space chains over them and path-space MLT agree on it within their variance,
+// as MLT does in the smoke room and ERPT without the smoke; ERPT refuses a density grid with a
+// message that names the algorithms that take it.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "common/math/statistics.h"
 #include "common/render/image_agreement.h"
 #include "common/render/local_render.h"
 #include "common/render/render_job.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/scene.h"
+#include "common/transport/path.h"
+#include "common/transport/path_tracer.h"
 
 namespace farm {
 namespace {
@@ -95,6 +105,103 @@ TEST(MediaRender, MltWithMarchedTransmittanceAgreesWithPathTracingThroughSmoke) 
   expectAgreesWithPathTracing(Algorithm::MLT, 256, 1, 256, kSmokeRoom);
 }
 
+// The smoky box without its smoke (fog, and tinted water in the glass ball: homogeneous media
+// only), written to a temporary folder; returns the scene file.
+std::string writeHomogeneousSmokyBox(const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  std::ifstream in(kSmokyBox);
+  std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const std::string mark : {"<medium type=\"heterogeneous\"", "id=\"smoke\"/>"}) {
+    const size_t at = xml.find(mark);
+    if (at == std::string::npos) throw std::runtime_error("no " + mark + " in the smoky box");
+    const bool medium = mark.rfind("<medium", 0) == 0;
+    const size_t begin = medium ? at : xml.rfind("<shape", at);
+    const std::string close = medium ? "</medium>" : "</shape>";
+    xml.erase(begin, xml.find(close, at) + close.size() - begin);
+  }
+  const std::string file = (dir / "scene.xml").string();
+  std::ofstream(file) << xml;
+  return file;
+}
+
+// ERPT's seeds are path tracing's paths, vertices in media and all: each path's value is f / p
+// times a scalar (its MIS weight; distances are drawn with the channels' mixture density), so
+// its colour is f's as the path's own vertices give it.
+TEST(MediaRender, PathTracingsRecordedPathsCarryTheirValuesColour) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("farm-recorded-paths-" + std::to_string(getpid()));
+  RenderSettings settings;
+  settings.width = settings.height = 24;
+  auto scene = loadScene(writeHomogeneousSmokyBox(dir), settings);
+  const int maxDepth = scene->maxDepth() == 0 ? -1 : scene->maxDepth();
+  PathTracer tracer(*scene, maxDepth);
+  Rng rng(3, 7);
+  IndependentSampler sampler(&rng);
+  int paths = 0, inMedia = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vec2f film(rng.nextFloat() * 24, rng.nextFloat() * 24);
+    tracer.visitPaths(film, sampler, [&](const PathTracer::TracedPath& seed) {
+      if (!(luminance(seed.value) > 0)) return;
+      Path x;
+      if (seed.light) x.vertices.push_back(*seed.light);
+      x.vertices.insert(x.vertices.end(), seed.camera, seed.camera + seed.count);
+      const PathContribution f = x.contribution(*scene, maxDepth);
+      ASSERT_TRUE(f.carriesLight()) << "path " << paths;
+      const Spectrum colour = seed.value / luminance(seed.value);
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(colour[c], f.color[c], 2e-3 * (1 + f.color[c]));
+      ++paths;
+      for (const PathVertex& v : x.vertices) inMedia += inMedium(v);
+    });
+  }
+  EXPECT_GT(paths, 5000);
+  EXPECT_GT(inMedia, paths / 10) << "too few paths scatter in the media to tell";
+  std::filesystem::remove_all(dir);
+}
+
+// ERPT in the smoky box without its smoke (fog, and tinted water in the glass ball: homogeneous
+// media only), its seeds' paths with path tracing's vertices in media. ERPT spreads each seed's
+// energy over many pixels, so the pixels' errors are not independent: the standard errors come
+// from the spread of whole renders' means (six of each), not from pairs of pixels.
+TEST(MediaRender, ErptInHomogeneousMediaAgreesWithPathTracing) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("farm-homogeneous-media-" + std::to_string(getpid()));
+  const std::string file = writeHomogeneousSmokyBox(dir);
+  ASSERT_TRUE(loadScene(file, RenderSettings())->hasMedia());
+  // Per render, the mean of each of 3 x 3 blocks of the 24 x 24 film and of the whole.
+  auto blockMeans = [](const Image& img) {
+    std::vector<double> m(10, 0.0);
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const double v = img.rgb[size_t(y * img.width + x) * 3 + size_t(c)];
+          m[size_t(y * 3 / img.height * 3 + x * 3 / img.width)] +=
+              v * 9 / (3.0 * img.rgb.size() / 3);
+          m[9] += v / double(img.rgb.size());
+        }
+    return m;
+  };
+  constexpr int kRenders = 6;
+  std::vector<std::vector<double>> erpt, pt;
+  for (int r = 0; r < kRenders; ++r) {
+    erpt.push_back(
+        blockMeans(renderSmokyBox(Algorithm::ERPT, 32, uint64_t(10 + r), nullptr, 1, 0, file)));
+    pt.push_back(blockMeans(
+        renderSmokyBox(Algorithm::PathTracing, 64, uint64_t(20 + r), nullptr, 1, 0, file)));
+  }
+  for (int b = 0; b < 10; ++b) {
+    std::vector<double> a, p;
+    for (int r = 0; r < kRenders; ++r)
+      a.push_back(erpt[size_t(r)][size_t(b)]), p.push_back(pt[size_t(r)][size_t(b)]);
+    const MeanEstimate ea = meanOfIndependent(a), ep = meanOfIndependent(p);
+    const double se = std::hypot(ea.standardError, ep.standardError);
+    EXPECT_NEAR(ea.mean, ep.mean, 4.5 * se)
+        << (b == 9 ? std::string("the whole image") : "block " + std::to_string(b));
+    if (b == 9)
+      std::printf("homogeneous media: means pt %.4f erpt %.4f (se %.4f)\n", ep.mean, ea.mean, se);
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(MediaRender, AlgorithmsThatDoNotTrackMediaRefuseThem) {
   for (Algorithm algorithm : allAlgorithms()) {
     RenderSettings settings;
@@ -105,13 +212,13 @@ TEST(MediaRender, AlgorithmsThatDoNotTrackMediaRefuseThem) {
     }
     try {
       loadScene(kSmokyBox, settings);
-      ADD_FAILURE() << algorithmName(algorithm) << " accepted a scene with media";
+      ADD_FAILURE() << algorithmName(algorithm) << " accepted a scene with a density grid";
     } catch (const SceneLoadError& e) {
-      EXPECT_NE(
-          std::string(e.what()).find(std::string("participating media are not supported by ") +
-                                     algorithmName(algorithm) +
-                                     " yet: use pt, bdpt, pssmlt, pssmlt-pt, mmlt or mlt"),
-          std::string::npos)
+      EXPECT_NE(std::string(e.what()).find(std::string("density grids are not supported by ") +
+                                           algorithmName(algorithm) +
+                                           " yet (homogeneous media are): use pt, bdpt, pssmlt, "
+                                           "pssmlt-pt, mmlt or mlt"),
+                std::string::npos)
           << e.what();
     }
   }

@@ -359,15 +359,19 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
                              "only): use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
   }
   // Participating media: path tracing and BDPT track them (and the primary-sample-space chains
-  // over them, which draw the same paths), path-space MLT's chains have vertices in them; ERPT,
-  // whose chains would start from path tracing's estimates of f instead of their own, does not.
-  bool media = !desc.media.empty();
-  for (const ShapeDescription& s : desc.shapes) media = media || s.nullBoundary;
-  if (media && settings.algorithm == Algorithm::ERPT) {
+  // over them, which draw the same paths), path-space MLT's chains have vertices in them. ERPT
+  // takes homogeneous media, where path tracing's seed values are f / p exactly; through a grid
+  // its chains would start from path tracing's estimate of a transmittance instead of their
+  // own, a start that is not their stationary distribution.
+  bool grid = false;
+  for (const MediumDescription& m : desc.media)
+    grid = grid || m.type == MediumDescription::Type::Grid;
+  if (grid && settings.algorithm == Algorithm::ERPT) {
     throw SceneLoadError(path, 0,
-                         std::string("participating media are not supported by ") +
+                         std::string("density grids are not supported by ") +
                              algorithmName(settings.algorithm) +
-                             " yet: use pt, bdpt, pssmlt, pssmlt-pt, mmlt or mlt");
+                             " yet (homogeneous media are): use pt, bdpt, pssmlt, pssmlt-pt, mmlt "
+                             "or mlt");
   }
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);

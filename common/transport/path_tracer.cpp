@@ -92,8 +92,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
                       const Add& add) const {
   // Paths through media are not recorded vertex by vertex yet: ERPT, the only caller that asks
   // for vertices, refuses scenes with media when it loads them.
-  if (vertices && scene_.hasMedia())
-    throw std::logic_error("PathTracer: path vertices in participating media are not recorded");
+
   Spectrum beta(1.0f);
   Ray ray = primary;
   int medium = scene_.cameraMedium();  // the medium the ray travels in (-1: vacuum)
@@ -127,6 +126,13 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       // surface, with the phase function for the BSDF and no cosine.
       if (depth >= maxDepth_) break;
       const Vec3f p = mediumStart + ray.d * event.t;
+      if (vertices) {
+        PathVertex v;
+        v.kind = PathVertex::Kind::Medium;
+        v.p = p;
+        v.medium = medium;
+        vertices->push_back(v);
+      }
       const HenyeyGreenstein phase = scene_.medium(medium).phase();
       const Vec3f wo = -ray.d;
       float uLight[4] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
@@ -140,7 +146,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
               *toward = medium;
               return *pdf > 0;
             },
-            false, add);
+            vertices != nullptr, add);
       }
       const Vec2f u(sampler.next(kCameraStream), sampler.next(kCameraStream));
       const float uRoulette = sampler.next(kCameraStream);
