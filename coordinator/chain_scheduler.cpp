@@ -1,20 +1,49 @@
 #include "coordinator/chain_scheduler.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace farm {
 
-ChainScheduler::ChainScheduler(std::vector<ChainSpec> chains, SteadyClock::duration leaseDuration)
+ChainScheduler::ChainScheduler(std::vector<ChainSpec> chains, SteadyClock::duration leaseDuration,
+                               uint64_t firstEpoch)
     : leaseDuration_(leaseDuration) {
   chains_.reserve(chains.size());
   for (ChainSpec& spec : chains) {
     Chain chain;
+    chain.epoch = firstEpoch;
     // A plan may come with resume fields set (never today); honour them as the starting point.
     chain.resumeState = spec.resumeState;
     chain.mutationsDone = spec.resumeMutations;
     chain.nextFlushIndex = spec.resumeFlushIndex;
     chain.spec = std::move(spec);
     chains_.push_back(std::move(chain));
+  }
+}
+
+std::vector<ChainScheduler::ChainSnapshot> ChainScheduler::snapshot() const {
+  std::vector<ChainSnapshot> out;
+  out.reserve(chains_.size());
+  for (const Chain& c : chains_) {
+    out.push_back({c.resumeState, c.mutationsDone, c.nextFlushIndex, c.state == State::kFinished});
+  }
+  return out;
+}
+
+void ChainScheduler::restore(const std::vector<ChainSnapshot>& resume) {
+  if (resume.size() != chains_.size()) {
+    throw std::invalid_argument("a resume record of " + std::to_string(resume.size()) +
+                                " chains for a plan of " + std::to_string(chains_.size()));
+  }
+  finished_ = 0;
+  for (size_t i = 0; i < chains_.size(); ++i) {
+    Chain& c = chains_[i];
+    c.resumeState = resume[i].resumeState;
+    c.mutationsDone = resume[i].mutationsDone;
+    c.nextFlushIndex = resume[i].nextFlushIndex;
+    c.holder.clear();
+    c.state = resume[i].finished ? State::kFinished : State::kWaiting;
+    finished_ += resume[i].finished;
   }
 }
 

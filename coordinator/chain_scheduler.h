@@ -22,7 +22,24 @@ struct ChainLease {
 
 class ChainScheduler {
  public:
-  ChainScheduler(std::vector<ChainSpec> chains, SteadyClock::duration leaseDuration);
+  // A chain's resume point: what a durable coordinator checkpoints (coordinator/job_store.h).
+  struct ChainSnapshot {
+    std::string resumeState;
+    int64_t mutationsDone = 0;
+    uint32_t nextFlushIndex = 0;
+    bool finished = false;
+  };
+
+  // Epochs of the chains' leases start after `firstEpoch`: a coordinator that restarts passes a
+  // base above any epoch it handed out before, so that no lease of the new run can be mistaken
+  // for one of the old.
+  ChainScheduler(std::vector<ChainSpec> chains, SteadyClock::duration leaseDuration,
+                 uint64_t firstEpoch = 0);
+
+  // Every chain's resume point, by index; and the way back (no chain leased, the finished ones
+  // finished). `resume` holds one entry per chain.
+  std::vector<ChainSnapshot> snapshot() const;
+  void restore(const std::vector<ChainSnapshot>& resume);
 
   uint32_t chainCount() const { return uint32_t(chains_.size()); }
   bool hasChain(uint32_t chain) const { return chain < chains_.size(); }

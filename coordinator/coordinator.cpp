@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <random>
 
+#include "coordinator/job_store.h"
+
 namespace farm {
 namespace fs = std::filesystem;
 
@@ -32,7 +34,52 @@ std::string checkJobSettings(const RenderSettings& s) {
 
 Coordinator::Coordinator(CoordinatorOptions options)
     : options_(std::move(options)), blobs_(options_.dataDir) {
+  if (options_.durable) {
+    Status st = JobStore::open(options_.dataDir, &store_);
+    if (!st.isOk()) throw std::runtime_error(st.message());
+    store_->setCheckpointBytes(options_.checkpointBytes);
+    restoreJobs();
+  }
   housekeeper_ = std::thread([this] { housekeeping(); });
+}
+
+SteadyClock::duration Coordinator::leaseDuration() const {
+  return std::chrono::duration_cast<SteadyClock::duration>(
+      std::chrono::duration<double>(options_.leaseSeconds));
+}
+
+void Coordinator::restoreJobs() {
+  std::vector<std::pair<std::string, BundleManifest>> bundles;
+  Status st = store_->loadBundles(&bundles);
+  if (!st.isOk()) throw std::runtime_error(st.message());
+  for (const auto& [hash, manifest] : bundles) {
+    if (blobs_.registerBundle(manifest) != hash) {
+      throw std::runtime_error("coordinator database " + store_->path() + ": bundle " + hash +
+                               " does not hash to its name");
+    }
+  }
+  std::vector<StoredJob> stored;
+  st = store_->loadJobs(&stored);
+  if (!st.isOk()) throw std::runtime_error(st.message());
+  const uint64_t firstEpoch = store_->generation() << 32;
+  for (StoredJob& record : stored) {
+    const std::string id = record.id;
+    const std::string outputDir = (fs::path(options_.dataDir) / "jobs" / id).string();
+    auto job = std::make_shared<Job>(
+        id, record.spec, leaseDuration(), outputDir, options_.log, [this] { wakeLeaseWaiters(); },
+        store_.get(), firstEpoch);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      jobs_.push_back(job);
+      jobsById_[id] = job;
+    }
+    job->restore(std::move(record));
+  }
+  if (options_.log) {
+    options_.log("coordinator database " + store_->path() + " (run " +
+                 std::to_string(store_->generation()) + "): " + std::to_string(stored.size()) +
+                 " job(s) remembered");
+  }
 }
 
 Coordinator::~Coordinator() {
@@ -48,7 +95,9 @@ Coordinator::~Coordinator() {
     std::lock_guard<std::mutex> lock(mutex_);
     jobs = jobs_;
   }
-  for (auto& job : jobs) job->cancel();
+  // A durable coordinator's jobs are not over: a restart resumes them. Their threads stop all
+  // the same, and nothing of it reaches the database.
+  for (auto& job : jobs) job->cancel(/*record=*/!store_);
 }
 
 void Coordinator::housekeeping() {
@@ -103,10 +152,19 @@ Status Coordinator::submit(JobSpec spec, std::string* jobId) {
       id = randomId("job-");
     } while (jobsById_.count(id));
     const std::string outputDir = (fs::path(options_.dataDir) / "jobs" / id).string();
-    job = std::make_shared<Job>(id, std::move(spec),
-                                std::chrono::duration_cast<SteadyClock::duration>(
-                                    std::chrono::duration<double>(options_.leaseSeconds)),
-                                outputDir, options_.log, [this] { wakeLeaseWaiters(); });
+    if (store_) {
+      // Durable before the client hears of the job: its bundle first, then the job itself.
+      BundleManifest manifest;
+      if (!spec.bundleHash.empty() && blobs_.findBundle(spec.bundleHash, &manifest)) {
+        Status st = store_->addBundle(spec.bundleHash, manifest);
+        if (!st.isOk()) return st;
+      }
+      Status st = store_->addJob(id, spec);
+      if (!st.isOk()) return st;
+    }
+    job = std::make_shared<Job>(
+        id, std::move(spec), leaseDuration(), outputDir, options_.log,
+        [this] { wakeLeaseWaiters(); }, store_.get(), store_ ? store_->generation() << 32 : 0);
     if (options_.log) {
       options_.log("job " + id + ": submitted (" + job->spec().name + ", " +
                    algorithmName(job->spec().settings.algorithm) + ")");

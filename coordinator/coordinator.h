@@ -19,9 +19,14 @@
 namespace farm {
 
 struct CoordinatorOptions {
-  std::string dataDir;       // blobs, laid-out bundles and final images; created if needed
-  double leaseSeconds = 30;  // a lease lives this long without a flush or renewal
-  double tickSeconds = 0.1;  // how often leases and time budgets are checked
+  std::string dataDir;  // blobs, laid-out bundles and final images; created if needed
+  // Jobs, their plans and every accepted flush in dataDir/coordinator.db (job_store.h): a
+  // coordinator started again on the same directory resumes every job. Without it, job records
+  // live in memory only.
+  bool durable = false;
+  uint64_t checkpointBytes = 0;  // durable: see JobStore::setCheckpointBytes
+  double leaseSeconds = 30;      // a lease lives this long without a flush or renewal
+  double tickSeconds = 0.1;      // how often leases and time budgets are checked
   std::function<void(const std::string&)> log;  // one line per event worth an operator's eye
 };
 
@@ -37,14 +42,18 @@ struct LeaseRef {
   uint64_t epoch = 0;
 };
 
+class JobStore;
+
 class Coordinator {
  public:
+  // Throws std::runtime_error when a durable coordinator cannot open or read its database.
   explicit Coordinator(CoordinatorOptions options);
   ~Coordinator();  // cancels what still runs and joins every thread
   Coordinator(const Coordinator&) = delete;
   Coordinator& operator=(const Coordinator&) = delete;
 
   BlobStore& blobs() { return blobs_; }
+  bool durable() const { return store_ != nullptr; }
   double leaseSeconds() const { return options_.leaseSeconds; }
   const std::string& dataDir() const { return options_.dataDir; }
 
@@ -90,8 +99,12 @@ class Coordinator {
   void housekeeping();
   std::vector<WorkerLease> leaseNow(const std::string& workerId, const WorkerInfo& worker, int max);
 
+  void restoreJobs();
+  SteadyClock::duration leaseDuration() const;
+
   const CoordinatorOptions options_;
   BlobStore blobs_;
+  std::unique_ptr<JobStore> store_;  // durable coordinators only; outlives the jobs
 
   // Lease waits sleep on workWake_ until workGeneration_ moves (wakeLeaseWaiters) or they time out;
   // at most kMaxLeaseWaiters at once, since each holds one of the server's threads.

@@ -5,6 +5,7 @@
 
 #include "common/film/error_metrics.h"
 #include "common/scene/scene.h"
+#include "coordinator/job_store.h"
 #include "coordinator/progress_math.h"
 
 namespace farm {
@@ -45,17 +46,38 @@ std::string withoutPrefix(std::string message, const std::string& root) {
   return message;
 }
 
+// The reference image to measure the error against (none without a path); throws when it
+// cannot be read or is not the film's size.
+std::optional<Image> readReference(const std::string& path, const RenderJob& renderJob) {
+  if (path.empty()) return std::nullopt;
+  Image image;
+  std::string error;
+  if (!readExr(path, &image, &error)) {
+    throw std::runtime_error("cannot read the reference image: " + error);
+  }
+  if (image.width != renderJob.width() || image.height != renderJob.height()) {
+    throw std::runtime_error("the reference image is " + std::to_string(image.width) + "x" +
+                             std::to_string(image.height) + " but the render is " +
+                             std::to_string(renderJob.width()) + "x" +
+                             std::to_string(renderJob.height()) +
+                             " (set --width/--height to the reference's size)");
+  }
+  return image;
+}
+
 }  // namespace
 
 Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
-         Log log, std::function<void()> workFreed)
+         Log log, std::function<void()> workFreed, JobStore* store, uint64_t firstEpoch)
     : id_(std::move(id)),
       spec_(std::move(spec)),
       leaseDuration_(leaseDuration),
       outputDir_(std::move(outputDir)),
       submitted_(SteadyClock::now()),
       log_(std::move(log)),
-      workFreed_(std::move(workFreed)) {}
+      workFreed_(std::move(workFreed)),
+      store_(store),
+      firstEpoch_(firstEpoch) {}
 
 Job::~Job() {
   cancelRequested_ = true;
@@ -88,22 +110,7 @@ void Job::prepare() {
     std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, spec_.settings);
     for (const std::string& w : scene->description().warnings) log("scene warning: " + w);
     auto renderJob = std::make_shared<RenderJob>(scene, spec_.settings, id_);
-    std::optional<Image> reference;
-    if (!spec_.referencePath.empty()) {
-      Image image;
-      std::string error;
-      if (!readExr(spec_.referencePath, &image, &error)) {
-        throw std::runtime_error("cannot read the reference image: " + error);
-      }
-      if (image.width != renderJob->width() || image.height != renderJob->height()) {
-        throw std::runtime_error("the reference image is " + std::to_string(image.width) + "x" +
-                                 std::to_string(image.height) + " but the render is " +
-                                 std::to_string(renderJob->width()) + "x" +
-                                 std::to_string(renderJob->height()) +
-                                 " (set --width/--height to the reference's size)");
-      }
-      reference = std::move(image);
-    }
+    std::optional<Image> reference = readReference(spec_.referencePath, *renderJob);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (isTerminal(phase_)) return;
@@ -132,9 +139,26 @@ void Job::prepare() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (isTerminal(phase_)) return;
     const uint32_t count = uint32_t(chains.size());
+    if (store_) {
+      // Rendering begins only once the plan is durable: a restart then resumes these chains
+      // instead of bootstrapping again (with another Z) under flushes already accepted.
+      JobPlan plan;
+      plan.bootstrap = bootstrap;
+      plan.bootstrap.seedSamples.clear();
+      plan.bootstrap.seedPaths.clear();
+      plan.bootstrap.seedContributions.clear();
+      plan.chains = chains;
+      plan.plannedWork = renderJob->plannedWork();
+      plan.width = width_;
+      plan.height = height_;
+      plan.loadSeconds = loadSeconds_;
+      plan.warnings = warnings_;
+      Status saved = store_->savePlan(id_, plan, secondsSince(submitted_, SteadyClock::now()));
+      if (!saved.isOk()) throw std::runtime_error(saved.message());
+    }
     bootstrap_ = std::move(bootstrap);
     plannedWork_ = renderJob->plannedWork();
-    scheduler_ = std::make_unique<ChainScheduler>(std::move(chains), leaseDuration_);
+    scheduler_ = std::make_unique<ChainScheduler>(std::move(chains), leaseDuration_, firstEpoch_);
     aggregator_ = std::make_unique<SplatAggregator>(renderJob->width(), renderJob->height(), count);
     renderStarted_ = SteadyClock::now();
     phase_ = JobPhase::kRendering;
@@ -154,13 +178,143 @@ void Job::prepare() {
   }
 }
 
+void Job::restore(StoredJob stored) {
+  const SteadyClock::time_point now = SteadyClock::now();
+  std::unique_lock<std::mutex> lock(mutex_);
+  // The job's clock goes on from where it was last written: the time the coordinator was down
+  // counts neither towards its elapsed time nor towards a time budget.
+  submitted_ = now - std::chrono::duration_cast<SteadyClock::duration>(
+                         std::chrono::duration<double>(std::max(0.0, stored.elapsedSeconds)));
+  errorSeries_ = std::move(stored.errorSeries);
+  error_ = stored.error;
+  if (stored.plan) {
+    bootstrap_ = stored.plan->bootstrap;
+    plannedWork_ = stored.plan->plannedWork;
+    width_ = stored.plan->width;
+    height_ = stored.plan->height;
+    loadSeconds_ = stored.plan->loadSeconds;
+    warnings_ = stored.plan->warnings;
+  }
+  if (isTerminal(stored.phase)) {
+    phase_ = stored.phase;
+    endedAt_ = now;
+    if (stored.checkpoint) {
+      stored.checkpoint->sums.clear();
+      aggregator_ = std::make_unique<SplatAggregator>(0, 0, std::move(*stored.checkpoint));
+    }
+    if (phase_ == JobPhase::kDone) {
+      const std::string path = (fs::path(outputDir_) / "image.exr").string();
+      Image image;
+      std::string error;
+      if (readExr(path, &image, &error, &finalMetadata_)) {
+        finalImage_ = std::move(image);
+        imagePath_ = path;
+      } else {
+        phase_ = JobPhase::kFailed;
+        error_ = "the final image is gone: " + error;
+      }
+    }
+    return;
+  }
+  if (stored.phase != JobPhase::kRendering || !stored.plan) {
+    lock.unlock();
+    log("resubmitted after a restart (it had not started rendering)");
+    start();
+    return;
+  }
+  const JobPlan& plan = *stored.plan;
+  const uint32_t count = uint32_t(plan.chains.size());
+  try {
+    aggregator_ = stored.checkpoint ? std::make_unique<SplatAggregator>(
+                                          width_, height_, std::move(*stored.checkpoint))
+                                    : std::make_unique<SplatAggregator>(width_, height_, count);
+    scheduler_ = std::make_unique<ChainScheduler>(plan.chains, leaseDuration_, firstEpoch_);
+    if (!stored.checkpointChains.empty()) scheduler_->restore(stored.checkpointChains);
+  } catch (const std::exception& e) {
+    failLocked(std::string("cannot resume after a restart: ") + e.what());
+    return;
+  }
+  for (ChainFlush& flush : stored.tail) {
+    std::string problem;
+    if (aggregator_->add(flush, &problem) != FlushOutcome::kAccepted) {
+      failLocked("cannot resume after a restart: the recorded flushes do not follow each other (" +
+                 problem + ")");
+      return;
+    }
+    scheduler_->recordFlush(flush.chainIndex, flush.flushIndex, flush.mutations,
+                            std::move(flush.state), flush.finished, "", 0, now);
+  }
+  if (!stored.tail.empty() && store_) {
+    // Fold the replayed log now, so that restarts in a row never replay more than one interval.
+    Status st = store_->checkpoint(id_, aggregator_->snapshot(), scheduler_->snapshot());
+    if (!st.isOk()) log("cannot checkpoint: " + st.message());
+  }
+  const double rendered = std::max(0.0, stored.elapsedSeconds - loadSeconds_ - bootstrap_.seconds);
+  renderStarted_ = now - std::chrono::duration_cast<SteadyClock::duration>(
+                             std::chrono::duration<double>(rendered));
+  phase_ = JobPhase::kRendering;
+  log("resumed after a restart: " + std::to_string(scheduler_->finishedCount()) + " of " +
+      std::to_string(count) + " chains finished, " + std::to_string(aggregator_->workDone()) + " " +
+      (isMarkovChain(spec_.settings.algorithm) ? "mutations" : "samples") + " done (" +
+      std::to_string(stored.tail.size()) + " flushes replayed after the checkpoint)");
+  preparer_ = std::thread([this] { loadForRestore(); });
+  if (workFreed_) workFreed_();
+}
+
+void Job::loadForRestore() {
+  try {
+    std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, spec_.settings);
+    auto renderJob = std::make_shared<RenderJob>(scene, spec_.settings, id_);
+    std::optional<Image> reference = readReference(spec_.referencePath, *renderJob);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (isTerminal(phase_)) return;
+    if (renderJob->width() != width_ || renderJob->height() != height_) {
+      failLocked("the scene loads at " + std::to_string(renderJob->width()) + "x" +
+                 std::to_string(renderJob->height()) + " after a restart, not " +
+                 std::to_string(width_) + "x" + std::to_string(height_));
+      return;
+    }
+    renderJob_ = std::move(renderJob);
+    reference_ = std::move(reference);
+    finishIfCompleteLocked(SteadyClock::now());
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (isTerminal(phase_)) return;
+    failLocked("cannot load the scene again after a restart: " +
+               withoutPrefix(e.what(), spec_.bundleRoot));
+  }
+}
+
 void Job::failLocked(const std::string& message) {
   phase_ = JobPhase::kFailed;
   error_ = message.empty() ? "unknown error" : message;
   log("failed: " + error_);
   endedAt_ = SteadyClock::now();
   if (scheduler_) scheduler_->stop();
+  recordEndLocked();
   endedSignal_.notify_all();
+}
+
+void Job::recordEndLocked() {
+  if (!store_) return;
+  const SplatAggregator::Snapshot counts =
+      aggregator_ ? aggregator_->snapshot() : SplatAggregator::Snapshot();
+  Status st = store_->setPhase(id_, phase_, error_, secondsSince(submitted_, *endedAt_),
+                               aggregator_ ? &counts : nullptr);
+  // The job has ended in memory whatever the disk says; a restart would redo its last part.
+  if (!st.isOk()) log("cannot record its end: " + st.message());
+}
+
+void Job::checkpointLocked() {
+  if (!store_) return;
+  const uint64_t filmBytes = uint64_t(width_) * uint64_t(height_) * 3 * sizeof(double);
+  if (tailBytes_ < store_->checkpointThreshold(filmBytes)) return;
+  Status st = store_->checkpoint(id_, aggregator_->snapshot(), scheduler_->snapshot());
+  if (st.isOk()) {
+    tailBytes_ = 0;
+  } else {
+    log("cannot checkpoint (the log keeps growing): " + st.message());
+  }
 }
 
 std::vector<WorkerLease> Job::lease(const std::string& worker, int max,
@@ -210,7 +364,19 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
   enforceBudgetLocked(now);
 
   std::string problem;
-  const FlushOutcome outcome = aggregator_->add(flush, &problem);
+  FlushOutcome outcome = aggregator_->check(flush, &problem);
+  if (outcome == FlushOutcome::kAccepted) {
+    if (store_) {
+      // Durable before it counts: the worker hears "accepted" only for a flush on disk.
+      Status recorded = store_->appendFlush(id_, flush, secondsSince(submitted_, now), &tailBytes_);
+      if (!recorded.isOk()) {
+        log(recorded.message());
+        return Status(StatusCode::kUnavailable,
+                      "job " + id_ + ": the coordinator cannot record flushes now (send it again)");
+      }
+    }
+    outcome = aggregator_->add(flush, &problem);
+  }
   switch (outcome) {
     case FlushOutcome::kAccepted:
       scheduler_->recordFlush(chain, flush.flushIndex, flush.mutations, std::move(flush.state),
@@ -251,7 +417,10 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       if (workFreed_) workFreed_();
     }
   }
-  if (outcome == FlushOutcome::kAccepted) recordErrorLocked(now, false);
+  if (outcome == FlushOutcome::kAccepted) {
+    recordErrorLocked(now, false);
+    checkpointLocked();
+  }
   finishIfCompleteLocked(now);
   return Status::ok();
 }
@@ -290,12 +459,18 @@ void Job::recordErrorLocked(SteadyClock::time_point now, bool force) {
   std::string error;
   if (compareImages(image, *reference_, &metrics, &error)) {
     errorSeries_.push_back({secondsSince(submitted_, now), work, metrics.rmse, metrics.relMse});
+    if (store_) {
+      Status st =
+          store_->addErrorSample(id_, uint32_t(errorSeries_.size() - 1), errorSeries_.back());
+      if (!st.isOk()) log(st.message());
+    }
   }
   metricsSeconds_ += secondsSince(start, SteadyClock::now());
 }
 
 void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
   if (phase_ != JobPhase::kRendering || !scheduler_->allFinished()) return;
+  if (!renderJob_) return;  // restored, its scene still loading: loadForRestore() finishes it
   phase_ = JobPhase::kFinishing;
   try {
     const int64_t work = aggregator_->workDone();
@@ -323,6 +498,7 @@ void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
     finalMetadata_ = std::move(metadata);
     phase_ = JobPhase::kDone;
     endedAt_ = now;
+    recordEndLocked();
     renderJob_.reset();  // the scene is no longer needed here (workers may still hold theirs)
     log("done in " + std::to_string(seconds) + " s, " + std::to_string(work) + " " +
         (isMarkovChain(spec_.settings.algorithm) ? "mutations" : "samples"));
@@ -332,7 +508,7 @@ void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
   }
 }
 
-JobPhase Job::cancel() {
+JobPhase Job::cancel(bool record) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (isTerminal(phase_)) return phase_;
   cancelRequested_ = true;
@@ -340,6 +516,7 @@ JobPhase Job::cancel() {
   log("cancelled");
   endedAt_ = SteadyClock::now();
   if (scheduler_) scheduler_->stop();
+  if (record) recordEndLocked();
   endedSignal_.notify_all();
   return phase_;
 }

@@ -89,19 +89,30 @@ struct FlushAck {
   bool yielded = false;  // stop only to let waiting chains run (not an error)
 };
 
+class JobStore;
+struct StoredJob;
+
 class Job {
  public:
   using Log = std::function<void(const std::string&)>;
   // `workFreed` is called (under the job's lock: it must not call back into the job) whenever
   // chains become free to lease: the bootstrap ended, leases expired, a chain yielded.
+  // With a `store`, the job records its plan, every flush before it acknowledges it, its error
+  // series and its end there (coordinator/job_store.h); its lease epochs start at `firstEpoch`.
   Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
-      Log log = {}, std::function<void()> workFreed = {});
+      Log log = {}, std::function<void()> workFreed = {}, JobStore* store = nullptr,
+      uint64_t firstEpoch = 0);
   ~Job();  // cancels and joins the preparation thread
   Job(const Job&) = delete;
   Job& operator=(const Job&) = delete;
 
   // Starts loading and bootstrapping on a thread of the job's own.
   void start();
+  // Instead of start(), for a job a durable coordinator remembers: a rendering job goes on from
+  // its checkpoint and log at once (its scene loads on the job's thread meanwhile; the final
+  // image waits for it), an ended one keeps its end, one that had not started rendering starts
+  // again. `stored.spec` must be this job's spec.
+  void restore(StoredJob stored);
 
   const std::string& id() const { return id_; }
   const JobSpec& spec() const { return spec_; }
@@ -118,8 +129,10 @@ class Job {
                      SteadyClock::time_point now, FlushAck* ack);
   // Expires leases, enforces the time budget, finishes the job when every chain has ended.
   void tick(SteadyClock::time_point now);
-  // Returns the phase after the cancellation (a job already over keeps its phase).
-  JobPhase cancel();
+  // Returns the phase after the cancellation (a job already over keeps its phase). Without
+  // `record`, the store does not hear of it (a durable coordinator shutting down: the job goes
+  // on after the restart).
+  JobPhase cancel(bool record = true);
 
   JobProgress progress(uint32_t errorSeriesFrom = 0) const;
   // The final EXR on disk; FailedPrecondition (saying why) unless the job is done.
@@ -132,7 +145,12 @@ class Job {
 
  private:
   void prepare();
+  void loadForRestore();
   void failLocked(const std::string& message);
+  // Records the job's end in the store (when it has one); false, having failed the job, when it
+  // cannot.
+  void recordEndLocked();
+  void checkpointLocked();
   void enforceBudgetLocked(SteadyClock::time_point now);
   void finishIfCompleteLocked(SteadyClock::time_point now);
   void recordErrorLocked(SteadyClock::time_point now, bool force);
@@ -146,9 +164,11 @@ class Job {
   const JobSpec spec_;
   const SteadyClock::duration leaseDuration_;
   const std::string outputDir_;
-  const SteadyClock::time_point submitted_;
+  SteadyClock::time_point submitted_;  // moved back by the time a restored job had run
   const Log log_;
   const std::function<void()> workFreed_;
+  JobStore* const store_;
+  const uint64_t firstEpoch_;
 
   mutable std::mutex mutex_;
   mutable std::condition_variable endedSignal_;
@@ -169,6 +189,7 @@ class Job {
   std::optional<SteadyClock::time_point> renderStarted_, endedAt_;
   std::vector<ErrorSample> errorSeries_;
   double metricsSeconds_ = 0;  // time spent computing error metrics, to keep it a small share
+  uint64_t tailBytes_ = 0;     // flushes recorded since the store's last checkpoint
   std::optional<Image> finalImage_;
   ImageMetadata finalMetadata_;
   std::string imagePath_;

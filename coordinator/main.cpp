@@ -29,8 +29,11 @@ int main(int argc, char** argv) {
   CLI::App app{
       "farm-coordinator: the render farm's coordinator. Accepts jobs from `farm submit`, runs "
       "each job's bootstrap, leases its chains to farm-worker processes, sums their flushes in "
-      "double precision and serves progress and the final EXR. Job records are kept in memory "
-      "(a restart forgets jobs); scene files and images are kept under --data."};
+      "double precision and serves progress and the final EXR. With --data DIR the coordinator "
+      "is durable: jobs, plans and every accepted flush are kept in DIR/coordinator.db (SQLite), "
+      "and a coordinator started again on DIR - after a crash, a kill or a shutdown - resumes "
+      "every job where its last acknowledged flush left it; workers reconnect on their own. "
+      "Without --data, job records live in memory only and a restart forgets them."};
   std::string listen;
   std::string dataDir;
   double leaseSeconds = 30;
@@ -39,8 +42,10 @@ int main(int argc, char** argv) {
                  "the chosen address is printed on stdout)")
       ->required();
   app.add_option("--data", dataDir,
-                 "directory for uploaded scene files and final images (default: a new "
-                 "directory under the system's temporary directory)");
+                 "directory for the job database, uploaded scene files and final images; a "
+                 "coordinator started on a directory a previous one used resumes its jobs "
+                 "(default: a new directory under the system's temporary directory, and job "
+                 "records in memory only)");
   app.add_option("--lease-seconds", leaseSeconds,
                  "how long a chain's lease lives without a flush or renewal before the chain "
                  "goes to another worker")
@@ -86,7 +91,20 @@ int main(int argc, char** argv) {
   options.dataDir = dataDir;
   options.leaseSeconds = leaseSeconds;
   options.log = [](const std::string& line) { spdlog::info("{}", line); };
-  farm::Coordinator coordinator(options);
+  options.durable = !temporaryDataDir;
+  if (!options.durable) {
+    spdlog::info(
+        "job records are kept in memory only: a restart forgets every job (pass --data "
+        "DIR to keep them)");
+  }
+  std::unique_ptr<farm::Coordinator> coordinatorPtr;
+  try {
+    coordinatorPtr = std::make_unique<farm::Coordinator>(options);
+  } catch (const std::exception& e) {
+    std::cerr << "farm-coordinator: " << e.what() << "\n";
+    return 1;
+  }
+  farm::Coordinator& coordinator = *coordinatorPtr;
   std::string error;
   auto server = farm::CoordinatorServer::start(listen, &coordinator, &error);
   if (!server) {

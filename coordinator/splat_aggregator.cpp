@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace farm {
 
@@ -11,7 +12,58 @@ SplatAggregator::SplatAggregator(int width, int height, uint32_t numChains)
       sums_(size_t(width) * size_t(height) * 3, 0.0),
       nextFlush_(numChains, 0) {}
 
+SplatAggregator::SplatAggregator(int width, int height, Snapshot snapshot)
+    : width_(width),
+      height_(height),
+      sums_(std::move(snapshot.sums)),
+      nextFlush_(std::move(snapshot.nextFlush)),
+      workDone_(snapshot.workDone),
+      rejected_(snapshot.rejected),
+      rays_(snapshot.rays),
+      acceptedFlushes_(snapshot.acceptedFlushes),
+      tallies_(std::move(snapshot.tallies)) {
+  if (sums_.size() != size_t(width) * size_t(height) * 3) {
+    throw std::invalid_argument("the snapshot's film holds " + std::to_string(sums_.size()) +
+                                " values, not " + std::to_string(width) + "x" +
+                                std::to_string(height) + "x3");
+  }
+}
+
+SplatAggregator::Snapshot SplatAggregator::snapshot() const {
+  Snapshot s;
+  s.sums = sums_;
+  s.nextFlush = nextFlush_;
+  s.workDone = workDone_;
+  s.rejected = rejected_;
+  s.rays = rays_;
+  s.acceptedFlushes = acceptedFlushes_;
+  s.tallies = tallies_;
+  return s;
+}
+
 FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem) {
+  const FlushOutcome outcome = check(flush, problem);
+  if (outcome != FlushOutcome::kAccepted) return outcome;
+  for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(flush.splats[i]);
+  workDone_ += flush.mutations;
+  rejected_ += flush.rejected;
+  rays_ += flush.rays;
+  for (const MutationTally& t : flush.tallies) {
+    auto it = std::find_if(tallies_.begin(), tallies_.end(),
+                           [&](const MutationTally& sum) { return sum.name == t.name; });
+    if (it == tallies_.end()) {
+      if (tallies_.size() >= kMaxTallyKinds) continue;  // a job tallies a handful of kinds
+      it = tallies_.insert(tallies_.end(), MutationTally{t.name, 0, 0});
+    }
+    it->proposed += t.proposed;
+    it->accepted += t.accepted;
+  }
+  ++acceptedFlushes_;
+  ++nextFlush_[flush.chainIndex];
+  return FlushOutcome::kAccepted;
+}
+
+FlushOutcome SplatAggregator::check(const ChainFlush& flush, std::string* problem) const {
   std::string ignored;
   std::string& why = problem ? *problem : ignored;
   const std::string name =
@@ -21,7 +73,7 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
           std::to_string(nextFlush_.size()) + " chains)";
     return FlushOutcome::kUnknownChain;
   }
-  uint32_t& next = nextFlush_[flush.chainIndex];
+  const uint32_t next = nextFlush_[flush.chainIndex];
   if (flush.flushIndex < next) {
     why = name + " was accepted before";
     return FlushOutcome::kDuplicate;
@@ -55,29 +107,12 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
       return FlushOutcome::kBadValues;
     }
   }
-  // Check everything before adding anything: a rejected flush must leave the sums untouched.
   size_t nonFinite = 0;
   for (float v : flush.splats) nonFinite += !std::isfinite(v);
   if (nonFinite > 0) {
     why = name + " holds " + std::to_string(nonFinite) + " NaN or infinite splat values";
     return FlushOutcome::kBadValues;
   }
-  for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(flush.splats[i]);
-  workDone_ += flush.mutations;
-  rejected_ += flush.rejected;
-  rays_ += flush.rays;
-  for (const MutationTally& t : flush.tallies) {
-    auto it = std::find_if(tallies_.begin(), tallies_.end(),
-                           [&](const MutationTally& sum) { return sum.name == t.name; });
-    if (it == tallies_.end()) {
-      if (tallies_.size() >= kMaxTallyKinds) continue;  // a job tallies a handful of kinds
-      it = tallies_.insert(tallies_.end(), MutationTally{t.name, 0, 0});
-    }
-    it->proposed += t.proposed;
-    it->accepted += t.accepted;
-  }
-  ++acceptedFlushes_;
-  ++next;
   return FlushOutcome::kAccepted;
 }
 

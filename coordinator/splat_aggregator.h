@@ -24,10 +24,28 @@ constexpr size_t kMaxTallyName = 32;
 
 class SplatAggregator {
  public:
-  SplatAggregator(int width, int height, uint32_t numChains);
+  // Everything the aggregator has summed: what a durable coordinator checkpoints
+  // (coordinator/job_store.h) and restores from.
+  struct Snapshot {
+    std::vector<double> sums;
+    std::vector<uint32_t> nextFlush;  // per chain
+    int64_t workDone = 0;
+    InvalidSplats rejected;
+    int64_t rays = 0;
+    uint64_t acceptedFlushes = 0;
+    std::vector<MutationTally> tallies;
+  };
 
+  SplatAggregator(int width, int height, uint32_t numChains);
+  // Continues from a snapshot of an aggregator of the same film and chain count.
+  SplatAggregator(int width, int height, Snapshot snapshot);
+
+  // What add() would answer, changing nothing: a durable coordinator records a flush between
+  // check() and add(), so that a flush it could not record is not summed either.
+  FlushOutcome check(const ChainFlush& flush, std::string* problem = nullptr) const;
   // Adds the flush's splats if it is the next one of its chain; *problem says why not.
   FlushOutcome add(const ChainFlush& flush, std::string* problem = nullptr);
+  Snapshot snapshot() const;
 
   // The summed splats (width*height*3), for RenderJob::resolve.
   const std::vector<double>& sums() const { return sums_; }

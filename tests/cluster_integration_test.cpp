@@ -211,6 +211,108 @@ TEST_P(ClusterFailure, KilledWorkerChangesNothingButTime) {
   expectImagesAgree(distributed, embedded);
 }
 
+// A durable coordinator killed (SIGKILL) three times while it renders two jobs - once right
+// after a submission, while that job bootstraps - and started again each time on its port and
+// data directory: the workers reconnect on their own, no job's work done ever goes back, and
+// both images are the ones `farm render` makes of the same jobs and seeds.
+TEST(ClusterCoordinatorCrash, KilledCoordinatorResumesEveryJob) {
+  ScratchDir scratch("coordinator-crash");
+  auto coordinator = std::make_unique<CoordinatorProcess>(scratch.path(), /*leaseSeconds=*/2.0);
+  ASSERT_TRUE(coordinator->ok()) << coordinator->log();
+  const int port = std::stoi(coordinator->address().substr(coordinator->address().rfind(':') + 1));
+  const std::string address = coordinator->address();
+  std::vector<std::unique_ptr<ChildProcess>> workers;
+  for (int i = 0; i < 2; ++i) {
+    const std::string log = scratch / ("worker" + std::to_string(i) + ".log");
+    workers.push_back(std::make_unique<ChildProcess>(
+        std::vector<std::string>{FARM_WORKER_BIN, "--coordinator", address, "--threads", "1",
+                                 "--cache", scratch / ("cache" + std::to_string(i))},
+        log, log));
+    ASSERT_FALSE(waitForText(log, "registered", seconds(15)).empty()) << "worker " << i;
+  }
+
+  const std::vector<std::vector<std::string>> jobSettings = {
+      {"--algorithm", "mlt", "--width", "64", "--height", "48", "--seed", "5", "--mpp", "1024"},
+      {"--algorithm", "pssmlt", "--width", "64", "--height", "48", "--seed", "6", "--mpp", "128"}};
+  std::vector<std::string> jobs;
+  jobs.push_back(submitJob(address, jobSettings[0], scratch.path()));
+  ASSERT_EQ(jobs[0].rfind("job-", 0), 0u) << jobs[0];
+
+  std::vector<int64_t> seen(2, 0);  // the most work done each job was seen with
+  auto observe = [&](const std::string& when) {
+    for (size_t j = 0; j < jobs.size(); ++j) {
+      const int64_t done = workDone(address, jobs[j], scratch.path());
+      EXPECT_GE(done, seen[j]) << "job " << j << "'s work done went back " << when;
+      seen[j] = std::max(seen[j], done);
+    }
+  };
+  for (int kill = 1; kill <= 3; ++kill) {
+    SCOPED_TRACE("kill " + std::to_string(kill));
+    if (kill == 2) {
+      // Killed while the new job bootstraps: it is prepared again after the restart.
+      jobs.push_back(submitJob(address, jobSettings[1], scratch.path()));
+      ASSERT_EQ(jobs[1].rfind("job-", 0), 0u) << jobs[1];
+    } else {
+      // Killed once more flushes have come in (at whatever point the workers then are).
+      const int64_t before = seen[0];
+      const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+      while (std::chrono::steady_clock::now() < deadline) {
+        observe("before kill " + std::to_string(kill));
+        if (seen[0] > before) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
+      ASSERT_GT(seen[0], before) << "no progress before kill " << kill << "\n"
+                                 << coordinator->log();
+    }
+    coordinator->process().signal(SIGKILL);
+    EXPECT_EQ(coordinator->process().wait(seconds(10)), 128 + SIGKILL);
+    coordinator = std::make_unique<CoordinatorProcess>(scratch.path(), 2.0, port,
+                                                       "coordinator" + std::to_string(kill));
+    ASSERT_TRUE(coordinator->ok()) << coordinator->log();
+    observe("across restart " + std::to_string(kill));
+    EXPECT_NE(coordinator->log().find(std::to_string(jobs.size()) + " job(s) remembered"),
+              std::string::npos)
+        << coordinator->log();
+  }
+  ASSERT_LT(seen[0], int64_t(64) * 48 * 1024) << "the job ended before the last kill";
+
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    const std::string out = scratch / ("distributed" + std::to_string(j) + ".exr");
+    CommandResult fetched = runCommand(
+        {FARM_CLI_BIN, "fetch", "--coordinator", address, jobs[j], "-o", out, "--timeout", "240"},
+        seconds(250), scratch.path());
+    ASSERT_EQ(fetched.exitCode, 0) << fetched.err << "\n" << coordinator->log();
+  }
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(workers[size_t(i)]->stop(seconds(20)), 0) << "worker " << i;
+    const std::string log = readFile(scratch / ("worker" + std::to_string(i) + ".log"));
+    size_t registrations = 0;
+    for (size_t at = log.find("registered"); at != std::string::npos;
+         at = log.find("registered", at + 1)) {
+      ++registrations;
+    }
+    EXPECT_GE(registrations, 2u) << "worker " << i << " never reconnected:\n" << log;
+  }
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    std::vector<std::string> render = {
+        FARM_CLI_BIN, "render", kScene, "-o", scratch / ("embedded" + std::to_string(j) + ".exr"),
+        "--threads",  "2"};
+    render.insert(render.end(), jobSettings[j].begin(), jobSettings[j].end());
+    CommandResult rendered = runCommand(render, seconds(120), scratch.path());
+    ASSERT_EQ(rendered.exitCode, 0) << rendered.err;
+    Image distributed, embedded;
+    std::string error;
+    ASSERT_TRUE(
+        readExr(scratch / ("distributed" + std::to_string(j) + ".exr"), &distributed, &error))
+        << error;
+    ASSERT_TRUE(readExr(scratch / ("embedded" + std::to_string(j) + ".exr"), &embedded, &error))
+        << error;
+    SCOPED_TRACE("job " + std::to_string(j));
+    expectImagesAgree(distributed, embedded);
+  }
+  EXPECT_EQ(coordinator->process().stop(), 0);
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Algorithms, ClusterTest,
     ::testing::Values(ClusterCase{"pt", {"--spp", "64"}}, ClusterCase{"bdpt", {"--spp", "16"}},

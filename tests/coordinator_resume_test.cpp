@@ -168,6 +168,145 @@ INSTANTIATE_TEST_SUITE_P(Algorithms, ResumeTest,
                            return name;
                          });
 
+// A durable coordinator (--data) that goes away at any point and is started again on the same
+// directory goes on with every job from its last acknowledged flush: the chains resume there,
+// a flush accepted before the restart is a duplicate after it, and the image is the one of an
+// uninterrupted run. Twice restarted mid-job (the second restart reads a checkpoint and replays
+// the log after it), once after the end.
+struct DurableCase {
+  Algorithm algorithm;
+  uint64_t checkpointBytes;  // 0: the default (here: replay the log); 1: after every flush
+};
+
+class DurableResumeTest : public ::testing::TestWithParam<DurableCase> {};
+
+double worstRelativeDifference(const Image& actual, const Image& expected) {
+  EXPECT_EQ(actual.rgb.size(), expected.rgb.size());
+  double worst = 0;
+  for (size_t i = 0; i < std::min(actual.rgb.size(), expected.rgb.size()); ++i) {
+    if (!std::isfinite(actual.rgb[i])) return INFINITY;
+    if (std::abs(expected.rgb[i]) > 1e-3) {
+      worst = std::max(
+          worst, double(std::abs(actual.rgb[i] - expected.rgb[i]) / std::abs(expected.rgb[i])));
+    }
+  }
+  return worst;
+}
+
+TEST_P(DurableResumeTest, RestartedCoordinatorGoesOnFromItsLastFlush) {
+  testing::ScratchDir scratch("durable");
+  RenderSettings settings = smallJob(GetParam().algorithm);
+  settings.samplesPerPixel = 32;  // 2 chains of 16384: four flushes each
+  settings.mutationsPerPixel = 32;
+
+  Image expected;
+  {
+    CoordinatorOptions options;
+    options.dataDir = scratch / "straight";
+    Coordinator coordinator(options);
+    const std::string job = submitAndWait(coordinator, settings);
+    const std::string worker = registerWorker(coordinator);
+    std::vector<WorkerLease> leases;
+    ASSERT_TRUE(coordinator.leaseChains(worker, 8, &leases).isOk());
+    for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(coordinator, worker, lease, 99), 4);
+    expected = finish(coordinator, job);
+  }
+
+  CoordinatorOptions options;
+  options.dataDir = scratch / "durable";
+  options.durable = true;
+  options.checkpointBytes = GetParam().checkpointBytes;
+  options.leaseSeconds = 60;
+  std::string job, oldWorker;
+  std::vector<WorkerLease> oldLeases;
+  ChainFlush replayed;  // flush 0 of chain 0, to deliver again after the restart
+  {
+    Coordinator first(options);
+    EXPECT_TRUE(first.durable());
+    job = submitAndWait(first, settings);
+    oldWorker = registerWorker(first);
+    ASSERT_TRUE(first.leaseChains(oldWorker, 8, &oldLeases).isOk());
+    ASSERT_EQ(oldLeases.size(), 2u);
+    auto renderJob = first.renderJob(job);
+    renderJob->runChain(oldLeases[0].lease.spec, [&](ChainFlush&& flush) {
+      replayed = flush;
+      FlushAck ack;
+      EXPECT_TRUE(
+          first.acceptFlush(oldWorker, job, oldLeases[0].lease.epoch, std::move(flush), &ack)
+              .isOk());
+      EXPECT_EQ(ack.result, FlushAck::Result::kAccepted);
+      return false;
+    });
+    EXPECT_EQ(runLease(first, oldWorker, oldLeases[1], 1), 1);
+  }  // gone: nothing more reaches its database than what it acknowledged
+
+  for (int restart = 1; restart <= 2; ++restart) {
+    SCOPED_TRACE("restart " + std::to_string(restart));
+    Coordinator again(options);
+    JobProgress p;
+    ASSERT_TRUE(again.progress(job, 0, &p).isOk());
+    EXPECT_EQ(p.phase, JobPhase::kRendering) << p.error;
+    EXPECT_EQ(p.workDone, 2 * 4096 * restart) << "work accepted before the restart";
+    EXPECT_EQ(p.chainsTotal, 2u);
+    if (GetParam().algorithm != Algorithm::PathTracing) {
+      EXPECT_GT(p.normalization, 0) << "the plan's Z";
+    }
+
+    // The old worker's id means nothing now (it registers again); the flush it delivered
+    // before the restart is known.
+    std::vector<WorkerLease> leases;
+    EXPECT_EQ(again.leaseChains(oldWorker, 8, &leases).code(), StatusCode::kNotFound);
+    const std::string worker = registerWorker(again);
+    FlushAck ack;
+    ChainFlush copy = replayed;
+    ASSERT_TRUE(
+        again.acceptFlush(worker, job, oldLeases[0].lease.epoch, std::move(copy), &ack).isOk());
+    EXPECT_EQ(ack.result, FlushAck::Result::kDuplicate);
+
+    ASSERT_TRUE(again.leaseChains(worker, 8, &leases).isOk());
+    ASSERT_EQ(leases.size(), 2u);
+    for (const WorkerLease& lease : leases) {
+      EXPECT_EQ(lease.lease.spec.resumeFlushIndex, uint32_t(restart));
+      EXPECT_EQ(lease.lease.spec.resumeMutations, 4096 * restart);
+      EXPECT_GT(lease.lease.epoch, oldLeases[0].lease.epoch) << "an epoch of the old run again";
+    }
+    // Wait for the scene (it loads again on the job's thread) before running chains here.
+    for (int i = 0; i < 600 && !again.renderJob(job); ++i) {
+      std::this_thread::sleep_for(milliseconds(50));
+    }
+    ASSERT_TRUE(again.renderJob(job));
+    if (restart == 1) {
+      for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(again, worker, lease, 1), 1);
+    } else {
+      for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(again, worker, lease, 99), 2);
+      EXPECT_LT(worstRelativeDifference(finish(again, job), expected), 1e-5);
+    }
+  }
+
+  // After the end: the job is done, with its image and its counts.
+  Coordinator after(options);
+  JobProgress p;
+  ASSERT_TRUE(after.progress(job, 0, &p).isOk());
+  EXPECT_EQ(p.phase, JobPhase::kDone) << p.error;
+  EXPECT_EQ(p.workDone, 32 * 32 * 32);
+  EXPECT_DOUBLE_EQ(p.fraction, 1.0);
+  Image image;
+  ASSERT_TRUE(after.finalImage(job, &image, nullptr).isOk());
+  EXPECT_LT(worstRelativeDifference(image, expected), 1e-5);
+}
+
+INSTANTIATE_TEST_SUITE_P(Algorithms, DurableResumeTest,
+                         ::testing::Values(DurableCase{Algorithm::PathTracing, 0},
+                                           DurableCase{Algorithm::PathTracing, 1},
+                                           DurableCase{Algorithm::MLT, 0},
+                                           DurableCase{Algorithm::PSSMLT, 1}),
+                         [](const auto& info) {
+                           std::string name = algorithmName(info.param.algorithm);
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name + (info.param.checkpointBytes ? "_checkpoint_every_flush"
+                                                                     : "_log_replay");
+                         });
+
 TEST(CoordinatorCore, FailedSceneKeepsItsMessage) {
   testing::ScratchDir scratch("failed-scene");
   CoordinatorOptions options;

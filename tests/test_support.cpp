@@ -134,21 +134,22 @@ std::string lastLine(const std::string& text) {
   return at == std::string::npos ? t : t.substr(at + 1);
 }
 
-CoordinatorProcess::CoordinatorProcess(const std::string& scratch, double leaseSeconds)
-    : scratch_(scratch) {
+CoordinatorProcess::CoordinatorProcess(const std::string& scratch, double leaseSeconds, int port,
+                                       const std::string& tag)
+    : scratch_(scratch), tag_(tag) {
   process_ = std::make_unique<ChildProcess>(
-      std::vector<std::string>{FARM_COORDINATOR_BIN, "--listen", "127.0.0.1:0", "--data",
-                               scratch + "/coordinator-data", "--lease-seconds",
-                               std::to_string(leaseSeconds)},
-      scratch + "/coordinator.out", scratch + "/coordinator.err");
-  std::string text = waitForText(scratch + "/coordinator.out",
+      std::vector<std::string>{
+          FARM_COORDINATOR_BIN, "--listen", "127.0.0.1:" + std::to_string(port), "--data",
+          scratch + "/coordinator-data", "--lease-seconds", std::to_string(leaseSeconds)},
+      scratch + "/" + tag + ".out", scratch + "/" + tag + ".err");
+  std::string text = waitForText(scratch + "/" + tag + ".out",
                                  "listening on 127.0.0.1:", std::chrono::seconds(15));
   size_t at = text.find("127.0.0.1:");
   if (at != std::string::npos) port_ = std::atoi(text.c_str() + at + 10);
 }
 
 std::string CoordinatorProcess::log() const {
-  return readFile(scratch_ + "/coordinator.out") + readFile(scratch_ + "/coordinator.err");
+  return readFile(scratch_ + "/" + tag_ + ".out") + readFile(scratch_ + "/" + tag_ + ".err");
 }
 
 }  // namespace farm::testing

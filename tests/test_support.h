@@ -60,17 +60,20 @@ std::string waitForText(const std::string& path, const std::string& needle,
                         std::chrono::milliseconds timeout);
 std::string lastLine(const std::string& text);
 
-// A farm-coordinator on 127.0.0.1 with a port of its own choosing.
+// A farm-coordinator on 127.0.0.1 with a port of its own choosing (or `port`), its data in
+// scratch/coordinator-data (durable: another one started on the same scratch resumes its jobs)
+// and its output in scratch/<tag>.out and .err.
 class CoordinatorProcess {
  public:
-  CoordinatorProcess(const std::string& scratch, double leaseSeconds = 5);
+  CoordinatorProcess(const std::string& scratch, double leaseSeconds = 5, int port = 0,
+                     const std::string& tag = "coordinator");
   bool ok() const { return port_ > 0; }
   std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
   ChildProcess& process() { return *process_; }
   std::string log() const;
 
  private:
-  std::string scratch_;
+  std::string scratch_, tag_;
   std::unique_ptr<ChildProcess> process_;
   int port_ = 0;
 };

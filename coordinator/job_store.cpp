@@ -1,0 +1,631 @@
+#include "coordinator/job_store.h"
+
+#include <sqlite3.h>
+#include <zstd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <functional>
+
+#include "proto/convert.h"
+#include "proto/coordinator_store.pb.h"
+
+namespace farm {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The schema's version in meta('schema'): a database of another version is refused, not guessed.
+constexpr int64_t kSchemaVersion = 1;
+
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS bundles(hash TEXT PRIMARY KEY, manifest BLOB NOT NULL);
+CREATE TABLE IF NOT EXISTS jobs(
+  ord INTEGER PRIMARY KEY AUTOINCREMENT,
+  id TEXT UNIQUE NOT NULL,
+  spec BLOB NOT NULL,
+  phase INTEGER NOT NULL,
+  error TEXT NOT NULL DEFAULT '',
+  elapsed REAL NOT NULL DEFAULT 0,
+  tail_bytes INTEGER NOT NULL DEFAULT 0);
+-- Large records in tables of their own: SQLite rewrites a whole row on UPDATE, and a job's row
+-- changes with every flush.
+CREATE TABLE IF NOT EXISTS plans(job TEXT PRIMARY KEY, record BLOB NOT NULL);
+CREATE TABLE IF NOT EXISTS checkpoints(job TEXT PRIMARY KEY, record BLOB NOT NULL);
+CREATE TABLE IF NOT EXISTS flushes(
+  job TEXT NOT NULL, seq INTEGER NOT NULL, record BLOB NOT NULL, PRIMARY KEY(job, seq));
+CREATE TABLE IF NOT EXISTS errors(
+  job TEXT NOT NULL, idx INTEGER NOT NULL, elapsed REAL NOT NULL, samples INTEGER NOT NULL,
+  rmse REAL NOT NULL, relmse REAL NOT NULL, PRIMARY KEY(job, idx));
+)sql";
+
+// One prepared statement; finalized on every path out.
+class Statement {
+ public:
+  Statement(sqlite3* db, const char* sql) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) stmt_ = nullptr;
+  }
+  ~Statement() { sqlite3_finalize(stmt_); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  bool ok() const { return stmt_ != nullptr; }
+  Statement& bind(int i, const std::string& text) {
+    sqlite3_bind_text(stmt_, i, text.data(), int(text.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Statement& blob(int i, const std::string& bytes) {
+    sqlite3_bind_blob64(stmt_, i, bytes.data(), bytes.size(), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Statement& bind(int i, int64_t v) {
+    sqlite3_bind_int64(stmt_, i, v);
+    return *this;
+  }
+  Statement& bind(int i, double v) {
+    sqlite3_bind_double(stmt_, i, v);
+    return *this;
+  }
+  Statement& null(int i) {
+    sqlite3_bind_null(stmt_, i);
+    return *this;
+  }
+  // SQLITE_ROW, SQLITE_DONE or an error code.
+  int step() { return stmt_ ? sqlite3_step(stmt_) : SQLITE_ERROR; }
+  bool run() { return step() == SQLITE_DONE; }
+  int64_t integer(int col) const { return sqlite3_column_int64(stmt_, col); }
+  double real(int col) const { return sqlite3_column_double(stmt_, col); }
+  bool isNull(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
+  std::string bytes(int col) const {
+    const void* data = sqlite3_column_blob(stmt_, col);
+    const int size = sqlite3_column_bytes(stmt_, col);
+    return data ? std::string(static_cast<const char*>(data), size_t(size)) : std::string();
+  }
+
+ private:
+  sqlite3* db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+std::string compress(const void* data, size_t size) {
+  std::string out(ZSTD_compressBound(size), '\0');
+  // Level 1: a flush is written once and read at most once (after a crash); speed wins.
+  const size_t n = ZSTD_compress(out.data(), out.size(), data, size, 1);
+  if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
+  out.resize(n);
+  return out;
+}
+
+// Decompresses exactly `size` bytes into `out`; false when the frame holds anything else.
+bool decompress(const std::string& frame, void* out, size_t size) {
+  const unsigned long long content = ZSTD_getFrameContentSize(frame.data(), frame.size());
+  if (content != size) return false;
+  const size_t n = ZSTD_decompress(out, size, frame.data(), frame.size());
+  return !ZSTD_isError(n) && n == size;
+}
+
+template <class T>
+std::string compressVector(const std::vector<T>& values) {
+  return compress(values.data(), values.size() * sizeof(T));
+}
+
+int phaseCode(JobPhase phase) {
+  switch (phase) {
+    case JobPhase::kSubmitted:
+    case JobPhase::kLoadingScene:
+    case JobPhase::kBootstrapping:
+      return 1;  // prepared again after a restart
+    case JobPhase::kRendering:
+    case JobPhase::kFinishing:
+      return 2;  // resumed from the log
+    case JobPhase::kDone:
+      return 3;
+    case JobPhase::kFailed:
+      return 4;
+    case JobPhase::kCancelled:
+      return 5;
+  }
+  return 1;
+}
+
+bool phaseFromCode(int64_t code, JobPhase* phase) {
+  switch (code) {
+    case 1:
+      *phase = JobPhase::kSubmitted;
+      return true;
+    case 2:
+      *phase = JobPhase::kRendering;
+      return true;
+    case 3:
+      *phase = JobPhase::kDone;
+      return true;
+    case 4:
+      *phase = JobPhase::kFailed;
+      return true;
+    case 5:
+      *phase = JobPhase::kCancelled;
+      return true;
+  }
+  return false;
+}
+
+void toRecord(const MutationTally& t, v1::MutationTally* out) {
+  out->set_name(t.name);
+  out->set_proposed(t.proposed);
+  out->set_accepted(t.accepted);
+}
+MutationTally fromRecord(const v1::MutationTally& t) {
+  return MutationTally{t.name(), t.proposed(), t.accepted()};
+}
+
+std::string encodeSpec(const JobSpec& spec) {
+  store::v1::JobRecord r;
+  *r.mutable_settings() = toProto(spec.settings);
+  r.set_scene_path(spec.scenePath);
+  r.set_reference_path(spec.referencePath);
+  r.set_name(spec.name);
+  r.set_bundle_hash(spec.bundleHash);
+  r.set_bundle_scene_path(spec.bundleScenePath);
+  r.set_bundle_root(spec.bundleRoot);
+  return r.SerializeAsString();
+}
+
+bool decodeSpec(const std::string& bytes, JobSpec* spec, std::string* error) {
+  store::v1::JobRecord r;
+  if (!r.ParseFromString(bytes)) {
+    *error = "unreadable job record";
+    return false;
+  }
+  if (!fromProto(r.settings(), &spec->settings, error)) return false;
+  spec->scenePath = r.scene_path();
+  spec->referencePath = r.reference_path();
+  spec->name = r.name();
+  spec->bundleHash = r.bundle_hash();
+  spec->bundleScenePath = r.bundle_scene_path();
+  spec->bundleRoot = r.bundle_root();
+  return true;
+}
+
+std::string encodePlan(const JobPlan& plan) {
+  store::v1::PlanRecord r;
+  r.set_normalization(plan.bootstrap.normalization);
+  r.set_normalization_std_error(plan.bootstrap.normalizationStdError);
+  r.set_candidates(plan.bootstrap.candidates);
+  r.set_non_zero_candidates(plan.bootstrap.nonZeroCandidates);
+  r.set_bootstrap_seconds(plan.bootstrap.seconds);
+  for (const ChainSpec& chain : plan.chains) *r.add_chains() = toProto(chain);
+  r.set_planned_work(plan.plannedWork);
+  r.set_width(plan.width);
+  r.set_height(plan.height);
+  r.set_load_seconds(plan.loadSeconds);
+  for (const std::string& w : plan.warnings) r.add_warnings(w);
+  return r.SerializeAsString();
+}
+
+bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
+  store::v1::PlanRecord r;
+  if (!r.ParseFromString(bytes)) {
+    *error = "unreadable plan record";
+    return false;
+  }
+  plan->bootstrap.normalization = r.normalization();
+  plan->bootstrap.normalizationStdError = r.normalization_std_error();
+  plan->bootstrap.candidates = r.candidates();
+  plan->bootstrap.nonZeroCandidates = r.non_zero_candidates();
+  plan->bootstrap.seconds = r.bootstrap_seconds();
+  for (const v1::ChainSpec& c : r.chains()) {
+    ChainSpec chain;
+    if (!fromProto(c, &chain, error)) return false;
+    plan->chains.push_back(std::move(chain));
+  }
+  plan->plannedWork = r.planned_work();
+  plan->width = r.width();
+  plan->height = r.height();
+  if (plan->width <= 0 || plan->height <= 0) {
+    *error = "plan record with an empty film";
+    return false;
+  }
+  plan->loadSeconds = r.load_seconds();
+  plan->warnings.assign(r.warnings().begin(), r.warnings().end());
+  return true;
+}
+
+std::string encodeFlush(const ChainFlush& flush) {
+  store::v1::FlushRecord r;
+  r.set_chain_index(flush.chainIndex);
+  r.set_flush_index(flush.flushIndex);
+  r.set_mutations(flush.mutations);
+  r.set_width(flush.width);
+  r.set_height(flush.height);
+  r.set_rejected_nan(flush.rejected.nan);
+  r.set_rejected_infinite(flush.rejected.infinite);
+  r.set_rejected_negative(flush.rejected.negative);
+  r.set_rays(flush.rays);
+  r.set_state(flush.state);
+  for (const MutationTally& t : flush.tallies) toRecord(t, r.add_tallies());
+  r.set_finished(flush.finished);
+  r.set_splats_zstd(compressVector(flush.splats));
+  return r.SerializeAsString();
+}
+
+bool decodeFlush(const std::string& bytes, ChainFlush* flush, std::string* error) {
+  store::v1::FlushRecord r;
+  if (!r.ParseFromString(bytes) || r.width() <= 0 || r.height() <= 0) {
+    *error = "unreadable flush record";
+    return false;
+  }
+  flush->chainIndex = r.chain_index();
+  flush->flushIndex = r.flush_index();
+  flush->mutations = r.mutations();
+  flush->width = r.width();
+  flush->height = r.height();
+  flush->rejected.nan = r.rejected_nan();
+  flush->rejected.infinite = r.rejected_infinite();
+  flush->rejected.negative = r.rejected_negative();
+  flush->rays = r.rays();
+  flush->state = r.state();
+  for (const v1::MutationTally& t : r.tallies()) flush->tallies.push_back(fromRecord(t));
+  flush->finished = r.finished();
+  flush->splats.resize(size_t(r.width()) * size_t(r.height()) * 3);
+  if (!decompress(r.splats_zstd(), flush->splats.data(), flush->splats.size() * sizeof(float))) {
+    *error = "flush " + std::to_string(r.flush_index()) + " of chain " +
+             std::to_string(r.chain_index()) + " has corrupt splats";
+    return false;
+  }
+  return true;
+}
+
+std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
+                             const std::vector<ChainScheduler::ChainSnapshot>& chains) {
+  store::v1::CheckpointRecord r;
+  r.set_sums_zstd(compressVector(s.sums));
+  r.set_work_done(s.workDone);
+  r.set_rejected_nan(s.rejected.nan);
+  r.set_rejected_infinite(s.rejected.infinite);
+  r.set_rejected_negative(s.rejected.negative);
+  r.set_rays(s.rays);
+  r.set_accepted_flushes(s.acceptedFlushes);
+  for (const MutationTally& t : s.tallies) toRecord(t, r.add_tallies());
+  for (size_t i = 0; i < chains.size(); ++i) {
+    store::v1::ChainRecord* c = r.add_chains();
+    c->set_resume_state(chains[i].resumeState);
+    c->set_mutations_done(chains[i].mutationsDone);
+    c->set_next_flush_index(chains[i].nextFlushIndex);
+    c->set_finished(chains[i].finished);
+  }
+  return r.SerializeAsString();
+}
+
+// `values` is the film's size (width*height*3), or 0 for the counts a finished job keeps.
+bool decodeCheckpoint(const std::string& bytes, size_t values, SplatAggregator::Snapshot* s,
+                      std::vector<ChainScheduler::ChainSnapshot>* chains, std::string* error) {
+  store::v1::CheckpointRecord r;
+  if (!r.ParseFromString(bytes)) {
+    *error = "unreadable checkpoint record";
+    return false;
+  }
+  s->sums.assign(values, 0.0);
+  if (values > 0 && !decompress(r.sums_zstd(), s->sums.data(), values * sizeof(double))) {
+    *error = "the checkpoint's sums are corrupt or of another film size";
+    return false;
+  }
+  s->workDone = r.work_done();
+  s->rejected.nan = r.rejected_nan();
+  s->rejected.infinite = r.rejected_infinite();
+  s->rejected.negative = r.rejected_negative();
+  s->rays = r.rays();
+  s->acceptedFlushes = r.accepted_flushes();
+  for (const v1::MutationTally& t : r.tallies()) s->tallies.push_back(fromRecord(t));
+  for (const store::v1::ChainRecord& c : r.chains()) {
+    chains->push_back({c.resume_state(), c.mutations_done(), c.next_flush_index(), c.finished()});
+    s->nextFlush.push_back(c.next_flush_index());
+  }
+  return true;
+}
+
+}  // namespace
+
+JobStore::JobStore(sqlite3* db, std::string path) : db_(db), path_(std::move(path)) {}
+
+JobStore::~JobStore() {
+  sqlite3_close(db_);
+}
+
+Status JobStore::fail(const std::string& what) const {
+  return Status(StatusCode::kInternal,
+                "coordinator database " + path_ + ": " + what + ": " + sqlite3_errmsg(db_));
+}
+
+Status JobStore::transaction(const std::string& what, const std::function<bool()>& body) {
+  if (Status st = exec("BEGIN IMMEDIATE"); !st.isOk()) return st;
+  // The body's statements are finalized when it returns: a statement still stepping would
+  // keep COMMIT from ending the transaction.
+  if (!body()) {
+    Status st = fail(what);
+    exec("ROLLBACK");
+    return st;
+  }
+  if (sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr) != SQLITE_OK) {
+    Status st = fail(what);
+    exec("ROLLBACK");
+    return st;
+  }
+  return Status::ok();
+}
+
+Status JobStore::exec(const char* sql) {
+  char* message = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+    std::string m = message ? message : "unknown error";
+    sqlite3_free(message);
+    return Status(StatusCode::kInternal, "coordinator database " + path_ + ": " + m);
+  }
+  return Status::ok();
+}
+
+Status JobStore::open(const std::string& dir, std::unique_ptr<JobStore>* store) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  const std::string path = (fs::path(dir) / "coordinator.db").string();
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
+      SQLITE_OK) {
+    std::string m = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    return Status::internal("cannot open the coordinator database " + path + ": " + m);
+  }
+  std::unique_ptr<JobStore> s(new JobStore(db, path));
+  sqlite3_busy_timeout(db, 5000);
+  // WAL: readers never block the writer, and a commit is one append. synchronous=FULL: a
+  // commit is on disk when it returns, so an acknowledged flush survives a power cut too.
+  for (const char* pragma : {"PRAGMA journal_mode=WAL", "PRAGMA synchronous=FULL"}) {
+    if (Status st = s->exec(pragma); !st.isOk()) return st;
+  }
+  if (Status st = s->exec(kSchema); !st.isOk()) return st;
+  int64_t schema = kSchemaVersion;
+  Status st = s->transaction("cannot initialize", [&] {
+    Statement version(db, "INSERT OR IGNORE INTO meta(key, value) VALUES('schema', ?)");
+    Statement read(db, "SELECT value FROM meta WHERE key = 'schema'");
+    Statement bump(db,
+                   "INSERT INTO meta(key, value) VALUES('generation', 1) "
+                   "ON CONFLICT(key) DO UPDATE SET value = value + 1 RETURNING value");
+    if (!version.bind(1, kSchemaVersion).run() || read.step() != SQLITE_ROW) return false;
+    schema = read.integer(0);
+    if (schema != kSchemaVersion) return false;
+    if (bump.step() != SQLITE_ROW) return false;
+    s->generation_ = uint64_t(bump.integer(0));
+    return bump.step() == SQLITE_DONE;
+  });
+  if (schema != kSchemaVersion) {
+    return Status::failedPrecondition("coordinator database " + path + " has schema version " +
+                                      std::to_string(schema) + "; this coordinator reads " +
+                                      std::to_string(kSchemaVersion));
+  }
+  if (!st.isOk()) return st;
+  *store = std::move(s);
+  return Status::ok();
+}
+
+Status JobStore::addBundle(const std::string& hash, const BundleManifest& manifest) {
+  v1::BundleManifest m;
+  for (const BundleEntry& e : manifest) {
+    v1::BundleFile* f = m.add_files();
+    f->set_path(e.path);
+    f->set_size(e.size);
+    f->set_hash(e.hash);
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "INSERT OR IGNORE INTO bundles(hash, manifest) VALUES(?, ?)");
+  if (!q.bind(1, hash).blob(2, m.SerializeAsString()).run()) return fail("cannot add a bundle");
+  return Status::ok();
+}
+
+Status JobStore::loadBundles(std::vector<std::pair<std::string, BundleManifest>>* bundles) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "SELECT hash, manifest FROM bundles");
+  int rc;
+  while ((rc = q.step()) == SQLITE_ROW) {
+    v1::BundleManifest m;
+    if (!m.ParseFromString(q.bytes(1))) {
+      return Status::internal("coordinator database " + path_ + ": unreadable bundle " +
+                              q.bytes(0));
+    }
+    BundleManifest manifest;
+    for (const v1::BundleFile& f : m.files()) manifest.push_back({f.path(), f.size(), f.hash()});
+    bundles->emplace_back(q.bytes(0), std::move(manifest));
+  }
+  if (rc != SQLITE_DONE) return fail("cannot read bundles");
+  return Status::ok();
+}
+
+Status JobStore::addJob(const std::string& id, const JobSpec& spec) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_, "INSERT INTO jobs(id, spec, phase) VALUES(?, ?, ?)");
+  if (!q.bind(1, id)
+           .blob(2, encodeSpec(spec))
+           .bind(3, int64_t(phaseCode(JobPhase::kSubmitted)))
+           .run()) {
+    return fail("cannot add job " + id);
+  }
+  return Status::ok();
+}
+
+Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::string& error,
+                          double elapsedSeconds, const SplatAggregator::Snapshot* finalCounts) {
+  std::string counts;
+  if (finalCounts) {
+    SplatAggregator::Snapshot c = *finalCounts;
+    c.sums.clear();
+    counts = encodeCheckpoint(c, {});
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  return transaction("cannot record job " + id + " as " + jobPhaseName(phase), [&] {
+    if (!Statement(db_, "UPDATE jobs SET phase = ?, error = ?, elapsed = ? WHERE id = ?")
+             .bind(1, int64_t(phaseCode(phase)))
+             .bind(2, error)
+             .bind(3, elapsedSeconds)
+             .bind(4, id)
+             .run()) {
+      return false;
+    }
+    if (!isTerminal(phase)) return true;
+    // Over: the log and the sums are folded into the image (or thrown away); what stays is the
+    // counts `farm status` shows.
+    const bool counted =
+        finalCounts ? Statement(db_, "INSERT OR REPLACE INTO checkpoints(job, record) VALUES(?, ?)")
+                          .bind(1, id)
+                          .blob(2, counts)
+                          .run()
+                    : Statement(db_, "DELETE FROM checkpoints WHERE job = ?").bind(1, id).run();
+    return counted &&
+           Statement(db_, "UPDATE jobs SET tail_bytes = 0 WHERE id = ?").bind(1, id).run() &&
+           Statement(db_, "DELETE FROM flushes WHERE job = ?").bind(1, id).run();
+  });
+}
+
+Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double elapsedSeconds) {
+  const std::string record = encodePlan(plan);
+  std::lock_guard<std::mutex> lock(mutex_);
+  return transaction("cannot record the plan of job " + id, [&] {
+    return Statement(db_, "INSERT OR REPLACE INTO plans(job, record) VALUES(?, ?)")
+               .bind(1, id)
+               .blob(2, record)
+               .run() &&
+           Statement(db_, "UPDATE jobs SET phase = ?, elapsed = ? WHERE id = ?")
+               .bind(1, int64_t(phaseCode(JobPhase::kRendering)))
+               .bind(2, elapsedSeconds)
+               .bind(3, id)
+               .run();
+  });
+}
+
+Status JobStore::appendFlush(const std::string& id, const ChainFlush& flush, double elapsedSeconds,
+                             uint64_t* tailBytes) {
+  const std::string record = encodeFlush(flush);  // compression outside the lock
+  std::lock_guard<std::mutex> lock(mutex_);
+  int64_t tail = 0;
+  Status st =
+      transaction("cannot record flush " + std::to_string(flush.flushIndex) + " of chain " +
+                      std::to_string(flush.chainIndex) + " of job " + id,
+                  [&] {
+                    if (!Statement(db_,
+                                   "INSERT INTO flushes(job, seq, record) VALUES(?1, "
+                                   "(SELECT IFNULL(MAX(seq), 0) + 1 FROM flushes "
+                                   "WHERE job = ?1), ?2)")
+                             .bind(1, id)
+                             .blob(2, record)
+                             .run()) {
+                      return false;
+                    }
+                    Statement update(db_,
+                                     "UPDATE jobs SET elapsed = ?, tail_bytes = "
+                                     "tail_bytes + ? WHERE id = ? RETURNING tail_bytes");
+                    update.bind(1, elapsedSeconds).bind(2, int64_t(record.size())).bind(3, id);
+                    if (update.step() != SQLITE_ROW) return false;
+                    tail = update.integer(0);
+                    return update.step() == SQLITE_DONE;
+                  });
+  if (st.isOk() && tailBytes) *tailBytes = uint64_t(tail);
+  return st;
+}
+
+Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapshot& sums,
+                            const std::vector<ChainScheduler::ChainSnapshot>& chains) {
+  const std::string record = encodeCheckpoint(sums, chains);
+  std::lock_guard<std::mutex> lock(mutex_);
+  return transaction("cannot checkpoint job " + id, [&] {
+    return Statement(db_, "INSERT OR REPLACE INTO checkpoints(job, record) VALUES(?, ?)")
+               .bind(1, id)
+               .blob(2, record)
+               .run() &&
+           Statement(db_, "UPDATE jobs SET tail_bytes = 0 WHERE id = ?").bind(1, id).run() &&
+           Statement(db_, "DELETE FROM flushes WHERE job = ?").bind(1, id).run();
+  });
+}
+
+Status JobStore::addErrorSample(const std::string& id, uint32_t index, const ErrorSample& e) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_,
+              "INSERT OR REPLACE INTO errors(job, idx, elapsed, samples, rmse, relmse) "
+              "VALUES(?, ?, ?, ?, ?, ?)");
+  if (!q.bind(1, id)
+           .bind(2, int64_t(index))
+           .bind(3, e.elapsedSeconds)
+           .bind(4, e.samples)
+           .bind(5, e.rmse)
+           .bind(6, e.relMse)
+           .run()) {
+    return fail("cannot record an error sample of job " + id);
+  }
+  return Status::ok();
+}
+
+Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Statement q(db_,
+              "SELECT id, spec, phase, error, elapsed, "
+              "(SELECT record FROM plans WHERE job = jobs.id), "
+              "(SELECT record FROM checkpoints WHERE job = jobs.id) FROM jobs ORDER BY ord");
+  int rc;
+  while ((rc = q.step()) == SQLITE_ROW) {
+    StoredJob job;
+    job.id = q.bytes(0);
+    std::string problem;
+    auto corrupt = [&](const std::string& what) {
+      return Status(StatusCode::kDataLoss,
+                    "coordinator database " + path_ + ": job " + job.id + ": " + what);
+    };
+    if (!decodeSpec(q.bytes(1), &job.spec, &problem)) return corrupt(problem);
+    if (!phaseFromCode(q.integer(2), &job.phase)) return corrupt("unknown phase");
+    job.error = q.bytes(3);
+    job.elapsedSeconds = q.real(4);
+    if (!q.isNull(5)) {
+      JobPlan plan;
+      if (!decodePlan(q.bytes(5), &plan, &problem)) return corrupt(problem);
+      job.plan = std::move(plan);
+    }
+    if (job.phase == JobPhase::kRendering && !job.plan) return corrupt("rendering without a plan");
+    if (!q.isNull(6)) {
+      const size_t values = job.phase == JobPhase::kRendering
+                                ? size_t(job.plan->width) * size_t(job.plan->height) * 3
+                                : 0;
+      SplatAggregator::Snapshot snapshot;
+      if (!decodeCheckpoint(q.bytes(6), values, &snapshot, &job.checkpointChains, &problem)) {
+        return corrupt(problem);
+      }
+      if (job.phase == JobPhase::kRendering &&
+          job.checkpointChains.size() != job.plan->chains.size()) {
+        return corrupt("a checkpoint of " + std::to_string(job.checkpointChains.size()) +
+                       " chains for a plan of " + std::to_string(job.plan->chains.size()));
+      }
+      job.checkpoint = std::move(snapshot);
+    }
+    if (job.phase == JobPhase::kRendering) {
+      Statement tail(db_, "SELECT record FROM flushes WHERE job = ? ORDER BY seq");
+      tail.bind(1, job.id);
+      int trc;
+      while ((trc = tail.step()) == SQLITE_ROW) {
+        ChainFlush flush;
+        if (!decodeFlush(tail.bytes(0), &flush, &problem)) return corrupt(problem);
+        job.tail.push_back(std::move(flush));
+      }
+      if (trc != SQLITE_DONE) return fail("cannot read the flushes of job " + job.id);
+    }
+    Statement errors(db_,
+                     "SELECT elapsed, samples, rmse, relmse FROM errors WHERE job = ? "
+                     "ORDER BY idx");
+    errors.bind(1, job.id);
+    int erc;
+    while ((erc = errors.step()) == SQLITE_ROW) {
+      job.errorSeries.push_back(
+          {errors.real(0), errors.integer(1), errors.real(2), errors.real(3)});
+    }
+    if (erc != SQLITE_DONE) return fail("cannot read the error series of job " + job.id);
+    jobs->push_back(std::move(job));
+  }
+  if (rc != SQLITE_DONE) return fail("cannot read jobs");
+  return Status::ok();
+}
+
+}  // namespace farm
