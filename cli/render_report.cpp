@@ -50,10 +50,12 @@ std::string rejectedLine(const JobProgress& p) {
          ", negative " + std::to_string(p.rejected.negative) + ")\n";
 }
 
-// "  scene warning: FILE:LINE: ...\n" for each of the loader's warnings.
+// "  scene warning: FILE:LINE: ...\n" for each of the loader's warnings, then a line for each
+// worker the job set aside.
 std::string warningLines(const JobProgress& p) {
   std::string s;
   for (const std::string& w : p.warnings) s += "  scene warning: " + w + "\n";
+  for (const std::string& w : p.setAside) s += "  " + w + "\n";
   return s;
 }
 
@@ -155,6 +157,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["rays_per_second"] = p.raysPerSecond;
   j["has_reference"] = p.hasReference;
   j["warnings"] = p.warnings;
+  j["set_aside"] = p.setAside;
   nlohmann::json tallies = nlohmann::json::object();
   for (const MutationTally& t : p.tallies) {
     tallies[t.name] = {{"proposed", t.proposed},

@@ -122,11 +122,13 @@ void ChainScheduler::finish(Chain& chain) {
   ++finished_;
 }
 
-int ChainScheduler::expireLeases(SteadyClock::time_point now) {
+int ChainScheduler::expireLeases(SteadyClock::time_point now,
+                                 std::vector<std::pair<uint32_t, std::string>>* holders) {
   int expired = 0;
   for (Chain& chain : chains_) {
     if (chain.state != State::kLeased || now < chain.deadline) continue;
     ++expired;
+    if (holders) holders->emplace_back(uint32_t(&chain - chains_.data()), chain.holder);
     if (stopping_) {
       finish(chain);
     } else {

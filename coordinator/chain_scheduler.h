@@ -66,8 +66,9 @@ class ChainScheduler {
   void yieldChain(uint32_t chain);
 
   // Puts chains whose lease expired back in the queue (or, once stopping, ends them). Returns
-  // the number of leases that expired.
-  int expireLeases(SteadyClock::time_point now);
+  // the number of leases that expired; `expired` (if given) receives each one's chain and holder.
+  int expireLeases(SteadyClock::time_point now,
+                   std::vector<std::pair<uint32_t, std::string>>* expired = nullptr);
 
   // No more leases: waiting chains end now, leased ones at their next flush or lease expiry.
   void stop();

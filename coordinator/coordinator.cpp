@@ -67,7 +67,7 @@ void Coordinator::restoreJobs() {
     const std::string outputDir = (fs::path(options_.dataDir) / "jobs" / id).string();
     auto job = std::make_shared<Job>(
         id, record.spec, leaseDuration(), outputDir, options_.log, [this] { wakeLeaseWaiters(); },
-        store_.get(), firstEpoch);
+        store_.get(), firstEpoch, options_.maxChainFailures);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       jobs_.push_back(job);
@@ -164,7 +164,8 @@ Status Coordinator::submit(JobSpec spec, std::string* jobId) {
     }
     job = std::make_shared<Job>(
         id, std::move(spec), leaseDuration(), outputDir, options_.log,
-        [this] { wakeLeaseWaiters(); }, store_.get(), store_ ? store_->generation() << 32 : 0);
+        [this] { wakeLeaseWaiters(); }, store_.get(), store_ ? store_->generation() << 32 : 0,
+        options_.maxChainFailures);
     if (options_.log) {
       options_.log("job " + id + ": submitted (" + job->spec().name + ", " +
                    algorithmName(job->spec().settings.algorithm) + ")");

@@ -25,6 +25,7 @@ struct CoordinatorOptions {
   // live in memory only.
   bool durable = false;
   uint64_t checkpointBytes = 0;  // durable: see JobStore::setCheckpointBytes
+  int maxChainFailures = 3;      // a worker failing one chain this often gets none of its job's
   double leaseSeconds = 30;      // a lease lives this long without a flush or renewal
   double tickSeconds = 0.1;      // how often leases and time budgets are checked
   std::function<void(const std::string&)> log;  // one line per event worth an operator's eye

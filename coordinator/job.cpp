@@ -68,7 +68,8 @@ std::optional<Image> readReference(const std::string& path, const RenderJob& ren
 }  // namespace
 
 Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
-         Log log, std::function<void()> workFreed, JobStore* store, uint64_t firstEpoch)
+         Log log, std::function<void()> workFreed, JobStore* store, uint64_t firstEpoch,
+         int maxChainFailures)
     : id_(std::move(id)),
       spec_(std::move(spec)),
       leaseDuration_(leaseDuration),
@@ -77,7 +78,8 @@ Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std:
       log_(std::move(log)),
       workFreed_(std::move(workFreed)),
       store_(store),
-      firstEpoch_(firstEpoch) {}
+      firstEpoch_(firstEpoch),
+      maxChainFailures_(std::max(1, maxChainFailures)) {}
 
 Job::~Job() {
   cancelRequested_ = true;
@@ -305,6 +307,17 @@ void Job::recordEndLocked() {
   if (!st.isOk()) log("cannot record its end: " + st.message());
 }
 
+void Job::countFailureLocked(const std::string& worker, uint32_t chain, const std::string& why) {
+  if (worker.empty() || setAside_.count(worker)) return;
+  const int failures = ++chainFailures_[worker][chain];
+  if (failures < maxChainFailures_) return;
+  const std::string reason = "worker " + worker + " set aside: chain " + std::to_string(chain) +
+                             " failed on it " + std::to_string(failures) + " times (last: " + why +
+                             ")";
+  setAside_[worker] = reason;
+  log(reason);
+}
+
 void Job::checkpointLocked() {
   if (!store_) return;
   const uint64_t filmBytes = uint64_t(width_) * uint64_t(height_) * 3 * sizeof(double);
@@ -321,7 +334,7 @@ std::vector<WorkerLease> Job::lease(const std::string& worker, int max,
                                     SteadyClock::time_point now) {
   std::vector<WorkerLease> out;
   std::lock_guard<std::mutex> lock(mutex_);
-  if (phase_ != JobPhase::kRendering) return out;
+  if (phase_ != JobPhase::kRendering || setAside_.count(worker)) return out;
   enforceBudgetLocked(now);
   for (ChainLease& lease : scheduler_->lease(worker, max, now)) {
     WorkerLease w;
@@ -392,6 +405,7 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       return Status::notFound("job " + id_ + ": " + problem);
     case FlushOutcome::kWrongSize:
     case FlushOutcome::kBadValues:
+      countFailureLocked(worker, chain, problem);
       return Status::invalidArgument("job " + id_ + ": " + problem);
   }
 
@@ -428,7 +442,13 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
 void Job::tick(SteadyClock::time_point now) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (phase_ != JobPhase::kRendering) return;
-  if (int expired = scheduler_->expireLeases(now)) {
+  std::vector<std::pair<uint32_t, std::string>> holders;
+  if (int expired = scheduler_->expireLeases(now, &holders)) {
+    if (!scheduler_->stopping()) {
+      for (const auto& [chain, holder] : holders) {
+        countFailureLocked(holder, chain, "its lease expired without a flush or renewal");
+      }
+    }
     log(std::to_string(expired) + " lease(s) expired; " +
         (scheduler_->stopping() ? "those chains end there"
                                 : "those chains resume from their last accepted flush"));
@@ -533,6 +553,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   p.elapsedSeconds = secondsSince(submitted_, now);
   p.loadSeconds = loadSeconds_;
   p.warnings = warnings_;
+  for (const auto& [worker, why] : setAside_) p.setAside.push_back(why);
   p.bootstrapSeconds = bootstrap_.seconds;
   p.normalization = bootstrap_.normalization;
   p.normalizationStdError = bootstrap_.normalizationStdError;

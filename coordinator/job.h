@@ -6,6 +6,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -62,6 +63,7 @@ struct JobProgress {
   int64_t rays = 0;                    // traced for the accepted work
   std::vector<MutationTally> tallies;  // proposals and acceptances by kind (Markov chains)
   std::vector<std::string> warnings;   // the scene loader's: what it left out or changed
+  std::vector<std::string> setAside;   // workers the job leases no more chains to, and why
   double raysPerSecond = 0;
   double normalization = 0, normalizationStdError = 0;
   double loadSeconds = 0, bootstrapSeconds = 0, renderSeconds = 0;
@@ -99,9 +101,12 @@ class Job {
   // chains become free to lease: the bootstrap ended, leases expired, a chain yielded.
   // With a `store`, the job records its plan, every flush before it acknowledges it, its error
   // series and its end there (coordinator/job_store.h); its lease epochs start at `firstEpoch`.
+  // A worker that fails one chain `maxChainFailures` times (its lease expires without the
+  // chain's end, or it sends the chain a flush of the wrong size or with bad values) gets no
+  // more of the job's chains; the job's progress names it and says why.
   Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
       Log log = {}, std::function<void()> workFreed = {}, JobStore* store = nullptr,
-      uint64_t firstEpoch = 0);
+      uint64_t firstEpoch = 0, int maxChainFailures = 3);
   ~Job();  // cancels and joins the preparation thread
   Job(const Job&) = delete;
   Job& operator=(const Job&) = delete;
@@ -151,6 +156,7 @@ class Job {
   // cannot.
   void recordEndLocked();
   void checkpointLocked();
+  void countFailureLocked(const std::string& worker, uint32_t chain, const std::string& why);
   void enforceBudgetLocked(SteadyClock::time_point now);
   void finishIfCompleteLocked(SteadyClock::time_point now);
   void recordErrorLocked(SteadyClock::time_point now, bool force);
@@ -169,6 +175,9 @@ class Job {
   const std::function<void()> workFreed_;
   JobStore* const store_;
   const uint64_t firstEpoch_;
+  const int maxChainFailures_;
+  std::map<std::string, std::map<uint32_t, int>> chainFailures_;  // worker -> chain -> failures
+  std::map<std::string, std::string> setAside_;                   // worker -> why
 
   mutable std::mutex mutex_;
   mutable std::condition_variable endedSignal_;

@@ -46,6 +46,12 @@ int main(int argc, char** argv) {
                  "coordinator started on a directory a previous one used resumes its jobs "
                  "(default: a new directory under the system's temporary directory, and job "
                  "records in memory only)");
+  int maxChainFailures = 3;
+  app.add_option("--max-chain-failures", maxChainFailures,
+                 "a worker whose lease of one chain expires (or that sends it a malformed flush) "
+                 "this many times gets no more chains of that job; the job's status names it")
+      ->check(CLI::Range(1, 1000000))
+      ->default_str("3");
   app.add_option("--lease-seconds", leaseSeconds,
                  "how long a chain's lease lives without a flush or renewal before the chain "
                  "goes to another worker")
@@ -90,6 +96,7 @@ int main(int argc, char** argv) {
   farm::CoordinatorOptions options;
   options.dataDir = dataDir;
   options.leaseSeconds = leaseSeconds;
+  options.maxChainFailures = maxChainFailures;
   options.log = [](const std::string& line) { spdlog::info("{}", line); };
   options.durable = !temporaryDataDir;
   if (!options.durable) {

@@ -307,6 +307,127 @@ INSTANTIATE_TEST_SUITE_P(Algorithms, DurableResumeTest,
                                                                      : "_log_replay");
                          });
 
+// Every fault counts once (issue 8): a late flush from a worker whose lease moved on is the
+// chain's next flush or a duplicate, never a second copy, and its sender is told to stop;
+// whichever of the two workers delivers first, the image is the uninterrupted run's.
+TEST(FaultsCountOnce, LateFlushFromAnOlderLease) {
+  testing::ScratchDir scratch("late-flush");
+  CoordinatorOptions options;
+  options.dataDir = scratch.path();
+  options.leaseSeconds = 60;
+  Coordinator coordinator(options);
+  const RenderSettings settings = smallJob(Algorithm::PSSMLT);
+
+  const std::string straight = submitAndWait(coordinator, settings);
+  const std::string worker = registerWorker(coordinator);
+  std::vector<WorkerLease> leases;
+  ASSERT_TRUE(coordinator.leaseChains(worker, 8, &leases).isOk());
+  for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(coordinator, worker, lease, 99), 2);
+  const Image expected = finish(coordinator, straight);
+
+  for (bool lateFirst : {true, false}) {
+    SCOPED_TRACE(lateFirst ? "the late flush first" : "the new holder first");
+    const std::string job = submitAndWait(coordinator, settings);
+    const std::string slow = registerWorker(coordinator);
+    const std::string fresh = registerWorker(coordinator);
+    std::vector<WorkerLease> old, now;
+    ASSERT_TRUE(coordinator.leaseChains(slow, 8, &old).isOk());
+    ASSERT_EQ(old.size(), 2u);
+    // The slow worker's leases expire; the chains go to the fresh one under a newer epoch.
+    coordinator.tick(SteadyClock::now() + std::chrono::seconds(61));
+    ASSERT_TRUE(coordinator.leaseChains(fresh, 8, &now).isOk());
+    ASSERT_EQ(now.size(), 2u);
+    EXPECT_GT(now[0].lease.epoch, old[0].lease.epoch);
+
+    std::vector<FlushAck> lateAcks;
+    if (lateFirst) {
+      EXPECT_EQ(runLease(coordinator, slow, old[0], 1, &lateAcks), 1);
+    }
+    std::vector<FlushAck> freshAcks;
+    EXPECT_EQ(runLease(coordinator, fresh, now[0], 99, &freshAcks), 2);
+    if (!lateFirst) {
+      EXPECT_EQ(runLease(coordinator, slow, old[0], 1, &lateAcks), 1);
+    }
+    ASSERT_EQ(lateAcks.size(), 1u);
+    ASSERT_EQ(freshAcks.size(), 2u);
+    EXPECT_TRUE(lateAcks[0].stop) << "a worker without the lease must be told to stop";
+    EXPECT_NE(lateAcks[0].reason.find("no longer holds the lease"), std::string::npos)
+        << lateAcks[0].reason;
+    // Exactly one of the two copies of flush 0 counted.
+    EXPECT_EQ(lateAcks[0].result,
+              lateFirst ? FlushAck::Result::kAccepted : FlushAck::Result::kDuplicate);
+    EXPECT_EQ(freshAcks[0].result,
+              lateFirst ? FlushAck::Result::kDuplicate : FlushAck::Result::kAccepted);
+    EXPECT_EQ(freshAcks[1].result, FlushAck::Result::kAccepted);
+    EXPECT_EQ(runLease(coordinator, fresh, now[1], 99), 2);
+    JobProgress p;
+    coordinator.progress(job, 0, &p);
+    EXPECT_EQ(p.workDone, 32 * 32 * 16);
+    EXPECT_LT(worstRelativeDifference(finish(coordinator, job), expected), 1e-5);
+  }
+}
+
+// A worker that keeps failing a chain - its leases expire, or it sends malformed flushes - is
+// set aside after --max-chain-failures tries: it gets none of the job's chains any more, the
+// job's progress says which worker and why, and another worker finishes the job.
+TEST(FaultsCountOnce, WorkerFailingAChainRepeatedlyIsSetAside) {
+  testing::ScratchDir scratch("set-aside");
+  CoordinatorOptions options;
+  options.dataDir = scratch.path();
+  options.leaseSeconds = 60;
+  options.maxChainFailures = 2;
+  Coordinator coordinator(options);
+  const std::string job = submitAndWait(coordinator, smallJob(Algorithm::PathTracing));
+
+  const std::string hanging = registerWorker(coordinator);
+  std::vector<WorkerLease> leases;
+  auto later = SteadyClock::now();
+  for (int attempt = 1; attempt <= 2; ++attempt) {
+    ASSERT_TRUE(coordinator.leaseChains(hanging, 8, &leases).isOk());
+    ASSERT_EQ(leases.size(), 2u) << "attempt " << attempt;
+    later += std::chrono::seconds(61);
+    coordinator.tick(later);
+  }
+  ASSERT_TRUE(coordinator.leaseChains(hanging, 8, &leases).isOk());
+  EXPECT_TRUE(leases.empty()) << "a set-aside worker got chains again";
+
+  // One that sends NaN twice for the same chain goes the same way.
+  const std::string broken = registerWorker(coordinator);
+  ASSERT_TRUE(coordinator.leaseChains(broken, 1, &leases).isOk());
+  ASSERT_EQ(leases.size(), 1u);
+  for (int attempt = 1; attempt <= 2; ++attempt) {
+    ChainFlush bad;
+    bad.chainIndex = leases[0].lease.spec.chainIndex;
+    bad.width = bad.height = 32;
+    bad.mutations = 1;
+    bad.splats.assign(32 * 32 * 3, std::nanf(""));
+    FlushAck ack;
+    EXPECT_EQ(
+        coordinator.acceptFlush(broken, job, leases[0].lease.epoch, std::move(bad), &ack).code(),
+        StatusCode::kInvalidArgument);
+  }
+  std::vector<WorkerLease> more;
+  ASSERT_TRUE(coordinator.leaseChains(broken, 8, &more).isOk());
+  EXPECT_TRUE(more.empty());
+
+  JobProgress p;
+  coordinator.progress(job, 0, &p);
+  ASSERT_EQ(p.setAside.size(), 2u);
+  const std::string all = p.setAside[0] + "\n" + p.setAside[1];
+  EXPECT_NE(all.find(hanging), std::string::npos) << all;
+  EXPECT_NE(all.find("lease expired"), std::string::npos) << all;
+  EXPECT_NE(all.find(broken), std::string::npos) << all;
+  EXPECT_NE(all.find("NaN"), std::string::npos) << all;
+
+  // Someone else finishes it (the broken worker's lease expires first).
+  coordinator.tick(later + std::chrono::seconds(61));
+  const std::string good = registerWorker(coordinator);
+  ASSERT_TRUE(coordinator.leaseChains(good, 8, &leases).isOk());
+  ASSERT_EQ(leases.size(), 2u);
+  for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(coordinator, good, lease, 99), 2);
+  finish(coordinator, job);
+}
+
 TEST(CoordinatorCore, FailedSceneKeepsItsMessage) {
   testing::ScratchDir scratch("failed-scene");
   CoordinatorOptions options;

@@ -176,6 +176,10 @@ class HostileRpcTest : public ::testing::Test {
     std::vector<float> splats;
     std::string state = "10";
     bool corruptChecksum = false;
+    // A worker that stops mid-upload: only this many splat bytes go out, then the stream ends
+    // (or, with `vanish`, the call is cancelled as a dying process's would be).
+    size_t sendBytes = SIZE_MAX;
+    bool vanish = false;
     int64_t rejectedTotal = 0, rejectedNan = 0, rejectedInfinite = 0, rejectedNegative = 0;
     std::vector<std::tuple<std::string, int64_t, int64_t>> tallies;
   };
@@ -214,9 +218,13 @@ class HostileRpcTest : public ::testing::Test {
     h->set_checksum(checksum);
     writer->Write(first);
     v1::UploadFlushRequest chunk;
-    chunk.set_splats(bytes);
+    chunk.set_splats(bytes.substr(0, std::min(bytes.size(), f.sendBytes)));
     writer->Write(chunk);
-    writer->WritesDone();
+    if (f.vanish) {
+      context.TryCancel();
+    } else {
+      writer->WritesDone();
+    }
     return writer->Finish();
   }
 
@@ -474,6 +482,20 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   Flush badTally = flush;
   badTally.tallies = {{"lens", 3, 7}};
   EXPECT_STATUS(upload(badTally, &response), INVALID_ARGUMENT, "malformed tally");
+
+  // A worker that stops answering mid-upload leaves nothing behind: the stream that ends early
+  // is refused, the one cancelled midway never reaches the job.
+  Flush halfSent = flush;
+  halfSent.sendBytes = flush.splats.size() * sizeof(float) / 2;
+  EXPECT_STATUS(upload(halfSent, &response), INVALID_ARGUMENT, "flush ended after 1536 of 3072");
+  halfSent.vanish = true;
+  EXPECT_FALSE(upload(halfSent, &response).ok());
+  {
+    grpc::Status status;
+    v1::JobProgress p = progress(job.jobId, &status);
+    ASSERT_TRUE(status.ok());
+    EXPECT_EQ(p.work_done(), 0) << "a broken upload counted";
+  }
 
   // The same flush twice: accepted once, a duplicate the second time.
   ASSERT_TRUE(upload(flush, &response).ok());
