@@ -1,7 +1,8 @@
-// Flushes per second a coordinator ingests, in memory and durable (--data: every flush in
-// SQLite, synchronous, before it is acknowledged; the log folded into checkpoints), for a dense
-// flush (path tracing: every pixel) and a sparse one (a Markov chain: 2% of the pixels), on a
-// 256x256 film. One chain, one thread: the cost of one acceptance, not of the locks.
+// Flush encoding on the wire, and flushes per second a coordinator ingests, in memory and durable
+// (--data: every flush in SQLite, synchronous, before it is acknowledged; the log folded into
+// checkpoints), for a dense flush (path tracing: every pixel) and a sparse one (a Markov chain: 2%
+// of the pixels), on a 256x256 film. One chain, one thread: the cost of one acceptance, not of the
+// locks.
 //   build/bin/farm_coordinator_bench
 #include <benchmark/benchmark.h>
 #include <unistd.h>
@@ -11,7 +12,9 @@
 #include <random>
 #include <thread>
 
+#include "common/render/render_job.h"
 #include "coordinator/coordinator.h"
+#include "proto/splat_codec.h"
 
 namespace farm {
 namespace {
@@ -85,6 +88,44 @@ void BM_AcceptFlush(benchmark::State& state, bool durable, double density) {
   }
   std::filesystem::remove_all(dir);
 }
+
+// What one flush of a real chain weighs on the wire (proto/splat_codec.h) against the dense
+// float film it replaces, and how long encoding it takes: the Cornell box at 256x256, one flush
+// of 4096 samples (pt) or mutations (mlt, pssmlt).
+void BM_EncodeFlush(benchmark::State& state, Algorithm algorithm) {
+  RenderSettings settings;
+  settings.algorithm = algorithm;
+  settings.width = 256;
+  settings.height = 256;
+  settings.samplesPerPixel = 1;
+  settings.mutationsPerPixel = 1;
+  settings.bootstrapSamples = 1 << 16;
+  auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml", settings);
+  RenderJob job(scene, settings, "bench");
+  const BootstrapResult bootstrap = job.bootstrap();
+  const std::vector<ChainSpec> chains = job.planChains(bootstrap);
+  ChainSpec spec = chains.at(0);
+  spec.flushInterval = 4096;
+  ChainFlush first;
+  job.runChain(spec, [&](ChainFlush&& flush) {
+    first = std::move(flush);
+    return false;
+  });
+  size_t bytes = 0;
+  for (auto _ : state) {
+    EncodedSplats e = encodeSplats(first.splats);
+    bytes = e.bytes.size();
+    benchmark::DoNotOptimize(e.bytes.data());
+  }
+  const double dense = double(first.splats.size() * sizeof(float));
+  state.counters["dense KiB"] = dense / 1024;
+  state.counters["sent KiB"] = double(bytes) / 1024;
+  state.counters["ratio"] = double(bytes) / dense;
+}
+
+BENCHMARK_CAPTURE(BM_EncodeFlush, CornellPt, Algorithm::PathTracing)->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_EncodeFlush, CornellPssmlt, Algorithm::PSSMLT)->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_EncodeFlush, CornellMlt, Algorithm::MLT)->MinTime(1.0);
 
 BENCHMARK_CAPTURE(BM_AcceptFlush, InMemoryDense, false, 1.0)->MinTime(2.0)->UseRealTime();
 BENCHMARK_CAPTURE(BM_AcceptFlush, DurableDense, true, 1.0)->MinTime(2.0)->UseRealTime();

@@ -14,6 +14,7 @@
 #include "proto/convert.h"
 #include "proto/farm.grpc.pb.h"
 #include "proto/sha256.h"
+#include "proto/splat_codec.h"
 #include "proto/wire_limits.h"
 
 #if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
@@ -510,11 +511,16 @@ class WorkerService final : public v1::WorkerApi::Service {
                      std::to_string(header.height()) + " but job " + header.job_id() + " renders " +
                      std::to_string(job.width) + "x" + std::to_string(job.height));
     }
-    const uint64_t expectedBytes = uint64_t(job.width) * uint64_t(job.height) * 3 * sizeof(float);
-    if (header.splat_bytes() != expectedBytes) {
+    const size_t values = size_t(job.width) * size_t(job.height) * 3;
+    const uint64_t denseBytes = uint64_t(values) * sizeof(float);
+    // Dense and uncompressed, the size is the film's; otherwise at most what a compressed
+    // dense film can take (the decoder checks the rest).
+    const uint64_t expectedBytes = header.splat_bytes();
+    if ((!header.sparse() && !header.compressed() && expectedBytes != denseBytes) ||
+        expectedBytes > maxEncodedSplatBytes(values)) {
       return invalid("flush announces " + std::to_string(header.splat_bytes()) +
                      " splat bytes; a " + std::to_string(job.width) + "x" +
-                     std::to_string(job.height) + " film takes " + std::to_string(expectedBytes));
+                     std::to_string(job.height) + " film takes " + std::to_string(denseBytes));
     }
     std::string bytes;
     bytes.reserve(size_t(expectedBytes));
@@ -565,9 +571,16 @@ class WorkerService final : public v1::WorkerApi::Service {
     flush.finished = header.finished();
     for (const v1::MutationTally& t : header.tallies())
       flush.tallies.push_back({t.name(), t.proposed(), t.accepted()});
-    flush.splats.resize(bytes.size() / sizeof(float));
-    std::memcpy(flush.splats.data(), bytes.data(), bytes.size());
-    bytes.clear();
+    EncodedSplats encoded;
+    encoded.sparse = header.sparse();
+    encoded.compressed = header.compressed();
+    encoded.rawBytes = header.raw_splat_bytes();
+    encoded.bytes = std::move(bytes);
+    std::string problem;
+    if (!decodeSplats(encoded, values, &flush.splats, &problem)) {
+      return invalid("flush " + std::to_string(header.flush_index()) + " of chain " +
+                     std::to_string(header.chain_index()) + ": " + problem);
+    }
 
     FlushAck ack;
     s = coordinator_->acceptFlush(header.worker_id(), header.job_id(), header.epoch(),

@@ -9,6 +9,7 @@
 
 #include "proto/convert.h"
 #include "proto/coordinator_store.pb.h"
+#include "proto/splat_codec.h"
 
 namespace farm {
 namespace fs = std::filesystem;
@@ -245,7 +246,11 @@ std::string encodeFlush(const ChainFlush& flush) {
   r.set_state(flush.state);
   for (const MutationTally& t : flush.tallies) toRecord(t, r.add_tallies());
   r.set_finished(flush.finished);
-  r.set_splats_zstd(compressVector(flush.splats));
+  EncodedSplats splats = encodeSplats(flush.splats);
+  r.set_splats(std::move(splats.bytes));
+  r.set_sparse(splats.sparse);
+  r.set_compressed(splats.compressed);
+  r.set_raw_splat_bytes(splats.rawBytes);
   return r.SerializeAsString();
 }
 
@@ -267,10 +272,15 @@ bool decodeFlush(const std::string& bytes, ChainFlush* flush, std::string* error
   flush->state = r.state();
   for (const v1::MutationTally& t : r.tallies()) flush->tallies.push_back(fromRecord(t));
   flush->finished = r.finished();
-  flush->splats.resize(size_t(r.width()) * size_t(r.height()) * 3);
-  if (!decompress(r.splats_zstd(), flush->splats.data(), flush->splats.size() * sizeof(float))) {
+  EncodedSplats splats;
+  splats.bytes = r.splats();
+  splats.sparse = r.sparse();
+  splats.compressed = r.compressed();
+  splats.rawBytes = r.raw_splat_bytes();
+  std::string problem;
+  if (!decodeSplats(splats, size_t(r.width()) * size_t(r.height()) * 3, &flush->splats, &problem)) {
     *error = "flush " + std::to_string(r.flush_index()) + " of chain " +
-             std::to_string(r.chain_index()) + " has corrupt splats";
+             std::to_string(r.chain_index()) + ": " + problem;
     return false;
   }
   return true;

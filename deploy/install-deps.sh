@@ -8,7 +8,7 @@ packages=(
   libembree-dev libtbb-dev
   libopenexr-dev libopenimageio-dev
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libpugixml-dev libtinyobjloader-dev libassimp-dev libopenvdb-dev libboost-dev zlib1g-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libsqlite3-dev libzstd-dev
+  libpugixml-dev libtinyobjloader-dev libassimp-dev libopenvdb-dev libboost-dev zlib1g-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libsqlite3-dev libzstd-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   iproute2 python3-numpy python3-openimageio
 )

@@ -6,7 +6,7 @@
 namespace farm {
 
 // Bumped whenever farm.proto changes incompatibly; RegisterWorker rejects a mismatch.
-inline constexpr uint32_t kProtocolVersion = 1;
+inline constexpr uint32_t kProtocolVersion = 2;  // 2: sparse and compressed flushes
 
 // gRPC message size limit, set explicitly on servers and channels (the library default of 4 MiB
 // is implicit and asymmetric between send and receive).

@@ -15,6 +15,7 @@
 #include "proto/convert.h"
 #include "proto/farm.grpc.pb.h"
 #include "proto/sha256.h"
+#include "proto/splat_codec.h"
 #include "proto/wire_limits.h"
 #include "worker/scene_cache.h"
 
@@ -136,7 +137,7 @@ struct RemoteChainSource::Impl {
         std::filesystem::create_directories(std::filesystem::path(path).parent_path());
         out = std::ofstream(path, std::ios::binary | std::ios::trunc);
         if (!out) throw std::runtime_error("cannot write " + path);
-        digest = Sha256();
+        digest.reset();
         written = 0;
         if (e.size > 0) return;
         out.close();
@@ -184,7 +185,8 @@ struct RemoteChainSource::Impl {
 
   // One attempt at uploading a flush.
   grpc::Status uploadOnce(const std::string& id, const LeasedChain& chain, const ChainFlush& flush,
-                          const std::string& checksum, v1::UploadFlushResponse* response) {
+                          const EncodedSplats& splats, const std::string& checksum,
+                          v1::UploadFlushResponse* response) {
     grpc::ClientContext context;
     setDeadline(&context, std::chrono::duration_cast<std::chrono::seconds>(kUploadDeadline));
     auto writer = stub->UploadFlush(&context, response);
@@ -211,11 +213,14 @@ struct RemoteChainSource::Impl {
       tally->set_proposed(t.proposed);
       tally->set_accepted(t.accepted);
     }
-    header->set_splat_bytes(uint64_t(flush.splats.size()) * sizeof(float));
+    header->set_splat_bytes(splats.bytes.size());
+    header->set_sparse(splats.sparse);
+    header->set_compressed(splats.compressed);
+    header->set_raw_splat_bytes(splats.rawBytes);
     header->set_checksum(checksum);
     bool open = writer->Write(message);
-    const char* bytes = reinterpret_cast<const char*>(flush.splats.data());
-    const size_t total = flush.splats.size() * sizeof(float);
+    const char* bytes = splats.bytes.data();
+    const size_t total = splats.bytes.size();
     for (size_t offset = 0; open && offset < total; offset += kMaxChunkBytes) {
       v1::UploadFlushRequest chunk;
       chunk.set_splats(bytes + offset, std::min(kMaxChunkBytes, total - offset));
@@ -306,8 +311,10 @@ std::shared_ptr<const RenderJob> RemoteChainSource::renderJob(const LeasedChain&
 }
 
 FlushReceipt RemoteChainSource::upload(const LeasedChain& chain, ChainFlush&& flush) {
+  // Encoded once, sent as often as it takes.
+  const EncodedSplats splats = encodeSplats(flush.splats);
   Sha256 digest;
-  digest.update(flush.splats.data(), flush.splats.size() * sizeof(float));
+  digest.update(splats.bytes);
   digest.update(flush.state);
   const std::string checksum = digest.hexDigest();
 
@@ -318,7 +325,7 @@ FlushReceipt RemoteChainSource::upload(const LeasedChain& chain, ChainFlush&& fl
   for (;;) {
     const std::string id = impl_->ensureRegistered();
     v1::UploadFlushResponse response;
-    grpc::Status status = impl_->uploadOnce(id, chain, flush, checksum, &response);
+    grpc::Status status = impl_->uploadOnce(id, chain, flush, splats, checksum, &response);
     if (status.ok()) {
       FlushReceipt receipt;
       receipt.accepted = response.result() == v1::UploadFlushResponse::ACCEPTED;

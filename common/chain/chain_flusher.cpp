@@ -38,7 +38,8 @@ bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::s
   f.mutations = sinceFlush_;
   f.width = film_.width();
   f.height = film_.height();
-  f.splats = film_.data();
+  // Rounded to float once per flush (the coordinator sums flushes in double).
+  f.splats.assign(film_.data().begin(), film_.data().end());
   f.rejected = rejected_;
   f.rays = int64_t(raysTraced - raysAtFlush_);
   f.state = state();

@@ -21,7 +21,9 @@ struct Image {
   }
   void set(int x, int y, const Spectrum& s) {
     float* p = &rgb[(size_t(y) * width + x) * 3];
-    p[0] = s.x; p[1] = s.y; p[2] = s.z;
+    p[0] = s.x;
+    p[1] = s.y;
+    p[2] = s.z;
   }
 };
 

@@ -82,9 +82,9 @@ void SplatBuffer::add(const Vec2f& film, const Spectrum& v, float scale) {
   if (!(std::fabs(film.x) < 1e7f && std::fabs(film.y) < 1e7f)) return;
   auto put = [&](int x, int y, float w) {
     if (x < 0 || y < 0 || x >= width_ || y >= height_ || w <= 0) return;
-    float* p = &data_[(size_t(y) * width_ + x) * 3];
-    float s = w * scale;
-    p[0] += v.x * s, p[1] += v.y * s, p[2] += v.z * s;
+    double* p = &data_[(size_t(y) * width_ + x) * 3];
+    const double s = double(w) * double(scale);
+    p[0] += double(v.x) * s, p[1] += double(v.y) * s, p[2] += double(v.z) * s;
   };
   if (filter_.type == FilterType::Box) {
     put(int(std::floor(film.x)), int(std::floor(film.y)), 1.0f);

@@ -65,13 +65,16 @@ class SplatBuffer {
   void clear();
   int width() const { return width_; }
   int height() const { return height_; }
-  const std::vector<float>& data() const { return data_; }
-  std::vector<float>& data() { return data_; }
+  const std::vector<double>& data() const { return data_; }
+  std::vector<double>& data() { return data_; }
 
  private:
   int width_, height_;
   PixelFilter filter_;
-  std::vector<float> data_;  // 3 floats per pixel
+  // 3 values per pixel, summed in double: a flush may hold 2^20 and more splats, and Markov
+  // chains pile theirs onto few pixels, where float sums would drop the increments below half
+  // an ulp of what is there.
+  std::vector<double> data_;
 };
 
 }  // namespace farm

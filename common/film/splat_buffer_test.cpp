@@ -29,6 +29,17 @@ double total(const SplatBuffer& film) {
   return sum;
 }
 
+// A flush's splats are summed in double: 2^20 increments of 1e-8 onto a pixel holding 1 (each
+// below half a float ulp of it) add up to 0.0105, which a float sum would drop entirely.
+TEST(SplatBuffer, SumsSplatsInDouble) {
+  SplatBuffer film(4, 4, {FilterType::Box, 0, 0});
+  film.add({1.5f, 1.5f}, Spectrum(1.0f));
+  for (int i = 0; i < (1 << 20); ++i) film.add({1.5f, 1.5f}, Spectrum(1e-8f));
+  const double expected = 1.0 + double(1 << 20) * double(1e-8f);
+  EXPECT_NEAR(film.data()[(1 * 4 + 1) * 3], expected, 1e-9);
+  EXPECT_NEAR(film.data()[(1 * 4 + 1) * 3 + 2], expected, 1e-9);
+}
+
 // Away from the edges a splat's weights add up to one: its value is kept.
 TEST(SplatBuffer, InteriorSplatsKeepTheirValue) {
   for (const NamedFilter& f : kFilters) {

@@ -1,0 +1,141 @@
+#include "proto/splat_codec.h"
+
+#include <zstd.h>
+
+#include <cstring>
+
+namespace farm {
+
+namespace {
+
+// zstd level 1: a worker compresses every flush it sends; the fast levels already remove the
+// zero runs that make up most of a sparse film.
+constexpr int kZstdLevel = 1;
+
+void putU32(std::string* out, uint32_t v) {
+  char b[4];
+  for (int i = 0; i < 4; ++i) b[i] = char((v >> (8 * i)) & 0xff);
+  out->append(b, 4);
+}
+void putF32(std::string* out, float f) {
+  uint32_t v;
+  std::memcpy(&v, &f, 4);
+  putU32(out, v);
+}
+uint32_t getU32(const char* p) {
+  uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v |= uint32_t(uint8_t(p[i])) << (8 * i);
+  return v;
+}
+float getF32(const char* p) {
+  const uint32_t v = getU32(p);
+  float f;
+  std::memcpy(&f, &v, 4);
+  return f;
+}
+
+}  // namespace
+
+uint64_t maxEncodedSplatBytes(size_t values) {
+  const uint64_t dense = uint64_t(values) * sizeof(float);
+  return std::max<uint64_t>(dense, ZSTD_compressBound(size_t(dense)));
+}
+
+EncodedSplats encodeSplats(const std::vector<float>& dense) {
+  EncodedSplats e;
+  const size_t pixels = dense.size() / 3;
+  size_t touched = 0;
+  for (size_t p = 0; p < pixels; ++p) {
+    touched += dense[3 * p] != 0.0f || dense[3 * p + 1] != 0.0f || dense[3 * p + 2] != 0.0f;
+  }
+  std::string raw;
+  if (touched * kSparseRecordBytes < dense.size() * sizeof(float)) {
+    e.sparse = true;
+    raw.reserve(touched * kSparseRecordBytes);
+    for (size_t p = 0; p < pixels; ++p) {
+      if (dense[3 * p] == 0.0f && dense[3 * p + 1] == 0.0f && dense[3 * p + 2] == 0.0f) continue;
+      putU32(&raw, uint32_t(p));
+      for (int c = 0; c < 3; ++c) putF32(&raw, dense[3 * p + size_t(c)]);
+    }
+  } else {
+    raw.resize(dense.size() * sizeof(float));
+    for (size_t i = 0; i < dense.size(); ++i) {
+      std::string word;
+      putF32(&word, dense[i]);
+      std::memcpy(&raw[4 * i], word.data(), 4);
+    }
+  }
+  e.rawBytes = raw.size();
+  std::string frame(ZSTD_compressBound(raw.size()), '\0');
+  const size_t n = ZSTD_compress(frame.data(), frame.size(), raw.data(), raw.size(), kZstdLevel);
+  if (!ZSTD_isError(n) && n < raw.size()) {
+    frame.resize(n);
+    e.compressed = true;
+    e.bytes = std::move(frame);
+  } else {
+    e.bytes = std::move(raw);
+  }
+  return e;
+}
+
+bool decodeSplats(const EncodedSplats& e, size_t values, std::vector<float>* dense,
+                  std::string* error) {
+  const uint64_t denseBytes = uint64_t(values) * sizeof(float);
+  const size_t pixels = values / 3;
+  if (e.bytes.size() > maxEncodedSplatBytes(values)) {
+    *error = "the splats take " + std::to_string(e.bytes.size()) + " bytes, more than a " +
+             std::to_string(values) + "-value film ever needs";
+    return false;
+  }
+  const uint64_t expectedRaw = e.sparse ? e.rawBytes : denseBytes;
+  if (e.sparse &&
+      (e.rawBytes % kSparseRecordBytes != 0 || e.rawBytes / kSparseRecordBytes > pixels)) {
+    *error = "sparse splats of " + std::to_string(e.rawBytes) + " bytes: not whole " +
+             std::to_string(kSparseRecordBytes) + "-byte records for at most " +
+             std::to_string(pixels) + " pixels";
+    return false;
+  }
+  std::string decompressed;
+  const std::string* raw = &e.bytes;
+  if (e.compressed) {
+    const unsigned long long content = ZSTD_getFrameContentSize(e.bytes.data(), e.bytes.size());
+    if (content != expectedRaw) {
+      *error = "the compressed splats do not hold the " + std::to_string(expectedRaw) +
+               " bytes the header announces";
+      return false;
+    }
+    decompressed.resize(size_t(expectedRaw));
+    const size_t n =
+        ZSTD_decompress(decompressed.data(), decompressed.size(), e.bytes.data(), e.bytes.size());
+    if (ZSTD_isError(n) || n != expectedRaw) {
+      *error = "the compressed splats are corrupt";
+      return false;
+    }
+    raw = &decompressed;
+  } else if (e.bytes.size() != expectedRaw) {
+    *error = "the splats take " + std::to_string(e.bytes.size()) + " bytes, not " +
+             std::to_string(expectedRaw);
+    return false;
+  }
+  dense->assign(values, 0.0f);
+  if (!e.sparse) {
+    for (size_t i = 0; i < values; ++i) (*dense)[i] = getF32(raw->data() + 4 * i);
+    return true;
+  }
+  int64_t previous = -1;
+  for (size_t at = 0; at < raw->size(); at += kSparseRecordBytes) {
+    const uint32_t pixel = getU32(raw->data() + at);
+    if (int64_t(pixel) <= previous || pixel >= pixels) {
+      *error = "a sparse splat record names pixel " + std::to_string(pixel) +
+               (pixel >= pixels ? " (off the film)" : " (out of order)");
+      return false;
+    }
+    previous = pixel;
+    for (int c = 0; c < 3; ++c) {
+      (*dense)[3 * size_t(pixel) + size_t(c)] = getF32(raw->data() + at + 4 + 4 * size_t(c));
+    }
+  }
+  return true;
+}
+
+}  // namespace farm
