@@ -5,9 +5,15 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <set>
 #include <thread>
+
+#include "tests/test_support.h"
+#include "worker/scene_cache.h"
 
 namespace farm {
 namespace {
@@ -147,6 +153,28 @@ TEST(WorkerPool, RefusalEndsRun) {
   source.refuse_ = true;
   WorkerPool pool(&source, WorkerPoolOptions{});
   EXPECT_THROW(pool.run(), SourceRefused);
+}
+
+// Workers of one host share its cache directory and fetch each bundle once: two caches on one
+// directory (two processes' worth: flock locks are per open file) asked for the same bundle at
+// once fetch it once, and the second finds it complete.
+TEST(SceneCache, WorkersOfOneHostFetchABundleOnce) {
+  testing::ScratchDir scratch("scene-cache");
+  std::atomic<int> fetches{0};
+  auto fetcher = [&](const std::string&, const std::string& dir) {
+    ++fetches;
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // a slow download
+    std::ofstream(dir + "/scene.xml") << "<scene/>";
+  };
+  SceneCache a(scratch.path(), fetcher), b(scratch.path(), fetcher);
+  const std::string hash(64, 'a');
+  std::string dirA, dirB;
+  std::thread other([&] { dirB = b.bundleDir(hash); });
+  dirA = a.bundleDir(hash);
+  other.join();
+  EXPECT_EQ(fetches.load(), 1);
+  EXPECT_EQ(dirA, dirB);
+  EXPECT_TRUE(std::filesystem::exists(dirA + "/scene.xml"));
 }
 
 }  // namespace

@@ -1,5 +1,11 @@
 #include "worker/scene_cache.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -9,6 +15,34 @@
 
 namespace farm {
 namespace fs = std::filesystem;
+
+namespace {
+
+// An exclusive flock(2) on a file beside the bundle, held while one process of the host fetches
+// it: workers sharing a cache directory (one host) fetch each bundle once, the others wait and
+// find it complete. Released when the process dies, so a crashed fetch blocks nobody.
+class FetchLock {
+ public:
+  explicit FetchLock(const fs::path& path) {
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw std::runtime_error("cannot open " + path.string() + ": " + strerror(errno));
+    while (::flock(fd_, LOCK_EX) != 0) {
+      if (errno != EINTR) {
+        const std::string why = strerror(errno);
+        ::close(fd_);
+        throw std::runtime_error("cannot lock " + path.string() + ": " + why);
+      }
+    }
+  }
+  ~FetchLock() { ::close(fd_); }  // closing the descriptor releases the lock
+  FetchLock(const FetchLock&) = delete;
+  FetchLock& operator=(const FetchLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace
 
 SceneCache::SceneCache(std::string cacheDir, BundleFetcher fetch, size_t maxJobs)
     : cacheDir_(std::move(cacheDir)),
@@ -26,6 +60,9 @@ std::string SceneCache::bundleDir(const std::string& hash) {
   fs::create_directories(cacheDir_, ec);
   if (ec)
     throw std::runtime_error("cannot create cache directory " + cacheDir_ + ": " + ec.message());
+  FetchLock hostLock(fs::path(cacheDir_) / (hash + ".lock"));
+  // Another worker of this host may have fetched it while this one waited for the lock.
+  if (fs::exists(marker, ec) && fs::is_directory(dir, ec)) return dir.string();
   // Download beside the final place and rename: other workers sharing the cache directory never
   // see a half-written bundle.
   const fs::path temp =

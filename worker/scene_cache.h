@@ -1,7 +1,7 @@
 #pragma once
 // A worker's scenes: bundles fetched once per content hash into a cache directory (kept across
-// runs and shared by jobs of the same bundle), and one loaded RenderJob per job, shared by all
-// of the job's chains on this worker.
+// runs, shared by jobs of the same bundle and by the workers of one host, which take turns by a
+// file lock), and one loaded RenderJob per job, shared by all of the job's chains on this worker.
 #include <functional>
 #include <future>
 #include <list>
