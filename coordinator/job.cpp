@@ -130,6 +130,10 @@ void Job::prepare() {
         renderJob->bootstrap([this](const Progress&) { return !cancelRequested_.load(); });
     std::vector<ChainSpec> chains = renderJob->planChains(bootstrap);
     if (chains.empty()) throw std::runtime_error("the render plan has no chains");
+    // Every seed now travels in its ChainSpec; the job keeps Z and its figures only.
+    bootstrap.seedSamples = {};
+    bootstrap.seedPaths = {};
+    bootstrap.seedContributions = {};
     for (size_t i = 0; i < chains.size(); ++i) {
       if (chains[i].chainIndex != i) {
         throw std::runtime_error("internal error: chain " + std::to_string(i) +
@@ -146,9 +150,6 @@ void Job::prepare() {
       // instead of bootstrapping again (with another Z) under flushes already accepted.
       JobPlan plan;
       plan.bootstrap = bootstrap;
-      plan.bootstrap.seedSamples.clear();
-      plan.bootstrap.seedPaths.clear();
-      plan.bootstrap.seedContributions.clear();
       plan.chains = chains;
       plan.plannedWork = renderJob->plannedWork();
       plan.width = width_;
@@ -201,7 +202,7 @@ void Job::restore(StoredJob stored) {
     phase_ = stored.phase;
     endedAt_ = now;
     if (stored.checkpoint) {
-      stored.checkpoint->sums.clear();
+      // An ended job's checkpoint holds its counts only (JobStore::setPhase).
       aggregator_ = std::make_unique<SplatAggregator>(0, 0, std::move(*stored.checkpoint));
     }
     if (phase_ == JobPhase::kDone) {
@@ -300,7 +301,7 @@ void Job::failLocked(const std::string& message) {
 void Job::recordEndLocked() {
   if (!store_) return;
   const SplatAggregator::Snapshot counts =
-      aggregator_ ? aggregator_->snapshot() : SplatAggregator::Snapshot();
+      aggregator_ ? aggregator_->snapshot(false) : SplatAggregator::Snapshot();
   Status st = store_->setPhase(id_, phase_, error_, secondsSince(submitted_, *endedAt_),
                                aggregator_ ? &counts : nullptr);
   // The job has ended in memory whatever the disk says; a restart would redo its last part.

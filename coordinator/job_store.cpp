@@ -1,7 +1,6 @@
 #include "coordinator/job_store.h"
 
 #include <sqlite3.h>
-#include <zstd.h>
 
 #include <cstring>
 #include <filesystem>
@@ -10,6 +9,7 @@
 #include "proto/convert.h"
 #include "proto/coordinator_store.pb.h"
 #include "proto/splat_codec.h"
+#include "proto/zstd_frame.h"
 
 namespace farm {
 namespace fs = std::filesystem;
@@ -89,26 +89,9 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
-std::string compress(const void* data, size_t size) {
-  std::string out(ZSTD_compressBound(size), '\0');
-  // Level 1: a flush is written once and read at most once (after a crash); speed wins.
-  const size_t n = ZSTD_compress(out.data(), out.size(), data, size, 1);
-  if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
-  out.resize(n);
-  return out;
-}
-
-// Decompresses exactly `size` bytes into `out`; false when the frame holds anything else.
-bool decompress(const std::string& frame, void* out, size_t size) {
-  const unsigned long long content = ZSTD_getFrameContentSize(frame.data(), frame.size());
-  if (content != size) return false;
-  const size_t n = ZSTD_decompress(out, size, frame.data(), frame.size());
-  return !ZSTD_isError(n) && n == size;
-}
-
 template <class T>
 std::string compressVector(const std::vector<T>& values) {
-  return compress(values.data(), values.size() * sizeof(T));
+  return zstdCompress(values.data(), values.size() * sizeof(T));
 }
 
 int phaseCode(JobPhase phase) {
@@ -316,7 +299,7 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, SplatAggregator::
     return false;
   }
   s->sums.assign(values, 0.0);
-  if (values > 0 && !decompress(r.sums_zstd(), s->sums.data(), values * sizeof(double))) {
+  if (values > 0 && !zstdDecompressExact(r.sums_zstd(), s->sums.data(), values * sizeof(double))) {
     *error = "the checkpoint's sums are corrupt or of another film size";
     return false;
   }
@@ -465,9 +448,10 @@ Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::stri
                           double elapsedSeconds, const SplatAggregator::Snapshot* finalCounts) {
   std::string counts;
   if (finalCounts) {
-    SplatAggregator::Snapshot c = *finalCounts;
-    c.sums.clear();
-    counts = encodeCheckpoint(c, {});
+    if (!finalCounts->sums.empty()) {
+      throw std::invalid_argument("JobStore::setPhase keeps an ended job's counts, not its film");
+    }
+    counts = encodeCheckpoint(*finalCounts, {});
   }
   std::lock_guard<std::mutex> lock(mutex_);
   return transaction("cannot record job " + id + " as " + jobPhaseName(phase), [&] {

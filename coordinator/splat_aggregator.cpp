@@ -29,9 +29,9 @@ SplatAggregator::SplatAggregator(int width, int height, Snapshot snapshot)
   }
 }
 
-SplatAggregator::Snapshot SplatAggregator::snapshot() const {
+SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
   Snapshot s;
-  s.sums = sums_;
+  if (withSums) s.sums = sums_;
   s.nextFlush = nextFlush_;
   s.workDone = workDone_;
   s.rejected = rejected_;

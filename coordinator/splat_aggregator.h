@@ -45,7 +45,8 @@ class SplatAggregator {
   FlushOutcome check(const ChainFlush& flush, std::string* problem = nullptr) const;
   // Adds the flush's splats if it is the next one of its chain; *problem says why not.
   FlushOutcome add(const ChainFlush& flush, std::string* problem = nullptr);
-  Snapshot snapshot() const;
+  // withSums false: the counts alone (what an ended job keeps), without copying the film.
+  Snapshot snapshot(bool withSums = true) const;
 
   // The summed splats (width*height*3), for RenderJob::resolve.
   const std::vector<double>& sums() const { return sums_; }

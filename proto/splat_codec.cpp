@@ -4,6 +4,8 @@
 
 #include <cstring>
 
+#include "proto/zstd_frame.h"
+
 namespace farm {
 
 namespace {
@@ -66,10 +68,8 @@ EncodedSplats encodeSplats(const std::vector<float>& dense) {
     }
   }
   e.rawBytes = raw.size();
-  std::string frame(ZSTD_compressBound(raw.size()), '\0');
-  const size_t n = ZSTD_compress(frame.data(), frame.size(), raw.data(), raw.size(), kZstdLevel);
-  if (!ZSTD_isError(n) && n < raw.size()) {
-    frame.resize(n);
+  std::string frame = zstdCompress(raw.data(), raw.size(), kZstdLevel);
+  if (frame.size() < raw.size()) {
     e.compressed = true;
     e.bytes = std::move(frame);
   } else {
@@ -98,17 +98,10 @@ bool decodeSplats(const EncodedSplats& e, size_t values, std::vector<float>* den
   std::string decompressed;
   const std::string* raw = &e.bytes;
   if (e.compressed) {
-    const unsigned long long content = ZSTD_getFrameContentSize(e.bytes.data(), e.bytes.size());
-    if (content != expectedRaw) {
-      *error = "the compressed splats do not hold the " + std::to_string(expectedRaw) +
-               " bytes the header announces";
-      return false;
-    }
     decompressed.resize(size_t(expectedRaw));
-    const size_t n =
-        ZSTD_decompress(decompressed.data(), decompressed.size(), e.bytes.data(), e.bytes.size());
-    if (ZSTD_isError(n) || n != expectedRaw) {
-      *error = "the compressed splats are corrupt";
+    if (!zstdDecompressExact(e.bytes, decompressed.data(), decompressed.size())) {
+      *error = "the compressed splats are corrupt or do not hold the " +
+               std::to_string(expectedRaw) + " bytes the header announces";
       return false;
     }
     raw = &decompressed;
