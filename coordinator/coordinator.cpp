@@ -355,12 +355,13 @@ Status Coordinator::renewLeases(const std::string& workerId, const std::vector<L
 }
 
 Status Coordinator::acceptFlush(const std::string& workerId, const std::string& jobId,
-                                uint64_t epoch, ChainFlush&& flush, FlushAck* ack) {
+                                uint64_t epoch, ChainFlush&& flush, FlushAck* ack,
+                                const EncodedSplats* wire) {
   Status status = findWorker(workerId, nullptr);
   if (!status.isOk()) return status;
   auto job = findJob(jobId);
   if (!job) return unknownJob(jobId);
-  return job->acceptFlush(workerId, epoch, std::move(flush), SteadyClock::now(), ack);
+  return job->acceptFlush(workerId, epoch, std::move(flush), SteadyClock::now(), ack, wire);
 }
 
 }  // namespace farm

@@ -87,8 +87,9 @@ class Coordinator {
   void wakeLeaseWaiters();
   Status renewLeases(const std::string& workerId, const std::vector<LeaseRef>& leases,
                      std::vector<LeaseRef>* lost);
+  // `wire`: the splats as they arrived (proto/splat_codec.h), kept so by a durable store.
   Status acceptFlush(const std::string& workerId, const std::string& jobId, uint64_t epoch,
-                     ChainFlush&& flush, FlushAck* ack);
+                     ChainFlush&& flush, FlushAck* ack, const EncodedSplats* wire = nullptr);
 
   // Expires leases, enforces time budgets, finishes jobs; also runs on a timer. Tests pass a
   // later `now` to make leases expire without waiting for them.

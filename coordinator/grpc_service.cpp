@@ -584,7 +584,7 @@ class WorkerService final : public v1::WorkerApi::Service {
 
     FlushAck ack;
     s = coordinator_->acceptFlush(header.worker_id(), header.job_id(), header.epoch(),
-                                  std::move(flush), &ack);
+                                  std::move(flush), &ack, &encoded);
     if (!s.isOk()) return toGrpc(s);
     switch (ack.result) {
       case FlushAck::Result::kAccepted:

@@ -357,7 +357,7 @@ bool Job::renew(const std::string& worker, uint32_t chain, uint64_t epoch,
 }
 
 Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& flush,
-                        SteadyClock::time_point now, FlushAck* ack) {
+                        SteadyClock::time_point now, FlushAck* ack, const EncodedSplats* wire) {
   std::lock_guard<std::mutex> lock(mutex_);
   *ack = FlushAck();
   if (isTerminal(phase_) || phase_ == JobPhase::kFinishing) {
@@ -382,7 +382,8 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
   if (outcome == FlushOutcome::kAccepted) {
     if (store_) {
       // Durable before it counts: the worker hears "accepted" only for a flush on disk.
-      Status recorded = store_->appendFlush(id_, flush, secondsSince(submitted_, now), &tailBytes_);
+      Status recorded =
+          store_->appendFlush(id_, flush, secondsSince(submitted_, now), &tailBytes_, wire);
       if (!recorded.isOk()) {
         log(recorded.message());
         return Status(StatusCode::kUnavailable,

@@ -22,6 +22,8 @@
 
 namespace farm {
 
+struct EncodedSplats;  // proto/splat_codec.h
+
 enum class JobPhase {
   kSubmitted,
   kLoadingScene,
@@ -130,8 +132,10 @@ class Job {
   // Validates and adds a flush. Not-OK statuses are the request's fault (unknown chain, wrong
   // size, out of order, bad values); a duplicate or a flush for a finished job is OK with the ack
   // saying so.
+  // `wire`: the splats as they arrived, for the durable store to keep as they are.
   Status acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& flush,
-                     SteadyClock::time_point now, FlushAck* ack);
+                     SteadyClock::time_point now, FlushAck* ack,
+                     const EncodedSplats* wire = nullptr);
   // Expires leases, enforces the time budget, finishes the job when every chain has ended.
   void tick(SteadyClock::time_point now);
   // Returns the phase after the cancellation (a job already over keeps its phase). Without

@@ -1,9 +1,13 @@
 #include "coordinator/job_store.h"
 
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 
 #include "proto/convert.h"
@@ -17,7 +21,8 @@ namespace fs = std::filesystem;
 namespace {
 
 // The schema's version in meta('schema'): a database of another version is refused, not guessed.
-constexpr int64_t kSchemaVersion = 1;
+// 2: flush records live in DIR/logs/<job>.log; the flushes table holds where.
+constexpr int64_t kSchemaVersion = 2;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);
@@ -35,7 +40,8 @@ CREATE TABLE IF NOT EXISTS jobs(
 CREATE TABLE IF NOT EXISTS plans(job TEXT PRIMARY KEY, record BLOB NOT NULL);
 CREATE TABLE IF NOT EXISTS checkpoints(job TEXT PRIMARY KEY, record BLOB NOT NULL);
 CREATE TABLE IF NOT EXISTS flushes(
-  job TEXT NOT NULL, seq INTEGER NOT NULL, record BLOB NOT NULL, PRIMARY KEY(job, seq));
+  job TEXT NOT NULL, seq INTEGER NOT NULL, offset INTEGER NOT NULL, length INTEGER NOT NULL,
+  PRIMARY KEY(job, seq));
 CREATE TABLE IF NOT EXISTS errors(
   job TEXT NOT NULL, idx INTEGER NOT NULL, elapsed REAL NOT NULL, samples INTEGER NOT NULL,
   rmse REAL NOT NULL, relmse REAL NOT NULL, PRIMARY KEY(job, idx));
@@ -215,7 +221,7 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   return true;
 }
 
-std::string encodeFlush(const ChainFlush& flush) {
+std::string encodeFlush(const ChainFlush& flush, const EncodedSplats* wire) {
   store::v1::FlushRecord r;
   r.set_chain_index(flush.chainIndex);
   r.set_flush_index(flush.flushIndex);
@@ -229,8 +235,10 @@ std::string encodeFlush(const ChainFlush& flush) {
   r.set_state(flush.state);
   for (const MutationTally& t : flush.tallies) toRecord(t, r.add_tallies());
   r.set_finished(flush.finished);
-  EncodedSplats splats = encodeSplats(flush.splats);
-  r.set_splats(std::move(splats.bytes));
+  EncodedSplats encoded;
+  if (!wire) encoded = encodeSplats(flush.splats);
+  const EncodedSplats& splats = wire ? *wire : encoded;
+  r.set_splats(splats.bytes);
   r.set_sparse(splats.sparse);
   r.set_compressed(splats.compressed);
   r.set_raw_splat_bytes(splats.rawBytes);
@@ -319,10 +327,56 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, SplatAggregator::
 
 }  // namespace
 
-JobStore::JobStore(sqlite3* db, std::string path) : db_(db), path_(std::move(path)) {}
+JobStore::JobStore(sqlite3* db, std::string path, std::string logDir)
+    : db_(db), path_(std::move(path)), logDir_(std::move(logDir)) {}
 
 JobStore::~JobStore() {
+  for (auto& [id, log] : logs_) ::close(log.fd);
   sqlite3_close(db_);
+}
+
+std::string JobStore::logPath(const std::string& id) const {
+  return (fs::path(logDir_) / (id + ".log")).string();
+}
+
+Status JobStore::openLogLocked(const std::string& id, FlushLog** out) {
+  auto it = logs_.find(id);
+  if (it != logs_.end()) {
+    *out = &it->second;
+    return Status::ok();
+  }
+  if (id.empty() || id.find('/') != std::string::npos || id.find("..") != std::string::npos) {
+    return Status::invalidArgument("job id '" + id + "' cannot name a log file");
+  }
+  // Bytes past the last committed record are a flush whose commit never happened (a crash
+  // between the append and the commit, or a failed commit): cut them off.
+  Statement q(db_, "SELECT IFNULL(MAX(offset + length), 0) FROM flushes WHERE job = ?");
+  q.bind(1, id);
+  if (q.step() != SQLITE_ROW) return fail("cannot read the log of job " + id);
+  const int64_t end = q.integer(0);
+  const std::string path = logPath(id);
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0 || ::ftruncate(fd, off_t(end)) != 0) {
+    const std::string why = std::strerror(errno);
+    if (fd >= 0) ::close(fd);
+    return Status::internal("cannot open the flush log " + path + ": " + why);
+  }
+  FlushLog& log = logs_[id];
+  log.fd = fd;
+  log.end = uint64_t(end);
+  *out = &log;
+  return Status::ok();
+}
+
+void JobStore::resetLogLocked(const std::string& id) {
+  // After a commit that dropped every row of the log: its bytes are garbage now, and the next
+  // open would cut them off anyway.
+  auto it = logs_.find(id);
+  if (it != logs_.end()) {
+    if (::ftruncate(it->second.fd, 0) == 0) it->second.end = 0;
+    ::close(it->second.fd);
+    logs_.erase(it);
+  }
 }
 
 Status JobStore::fail(const std::string& what) const {
@@ -368,11 +422,18 @@ Status JobStore::open(const std::string& dir, std::unique_ptr<JobStore>* store) 
     sqlite3_close(db);
     return Status::internal("cannot open the coordinator database " + path + ": " + m);
   }
-  std::unique_ptr<JobStore> s(new JobStore(db, path));
+  const std::string logDir = (fs::path(dir) / "logs").string();
+  fs::create_directories(logDir, ec);
+  if (ec) {
+    sqlite3_close(db);
+    return Status::internal("cannot create " + logDir + ": " + ec.message());
+  }
+  std::unique_ptr<JobStore> s(new JobStore(db, path, logDir));
   sqlite3_busy_timeout(db, 5000);
   // WAL: readers never block the writer, and a commit is one append. synchronous=FULL: a
   // commit is on disk when it returns, so an acknowledged flush survives a power cut too.
-  for (const char* pragma : {"PRAGMA journal_mode=WAL", "PRAGMA synchronous=FULL"}) {
+  for (const char* pragma :
+       {"PRAGMA page_size=65536", "PRAGMA journal_mode=WAL", "PRAGMA synchronous=FULL"}) {
     if (Status st = s->exec(pragma); !st.isOk()) return st;
   }
   if (Status st = s->exec(kSchema); !st.isOk()) return st;
@@ -454,7 +515,7 @@ Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::stri
     counts = encodeCheckpoint(*finalCounts, {});
   }
   std::lock_guard<std::mutex> lock(mutex_);
-  return transaction("cannot record job " + id + " as " + jobPhaseName(phase), [&] {
+  Status st = transaction("cannot record job " + id + " as " + jobPhaseName(phase), [&] {
     if (!Statement(db_, "UPDATE jobs SET phase = ?, error = ?, elapsed = ? WHERE id = ?")
              .bind(1, int64_t(phaseCode(phase)))
              .bind(2, error)
@@ -476,6 +537,12 @@ Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::stri
            Statement(db_, "UPDATE jobs SET tail_bytes = 0 WHERE id = ?").bind(1, id).run() &&
            Statement(db_, "DELETE FROM flushes WHERE job = ?").bind(1, id).run();
   });
+  if (st.isOk() && isTerminal(phase)) {
+    resetLogLocked(id);
+    std::error_code ec;
+    fs::remove(logPath(id), ec);
+  }
+  return st;
 }
 
 Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double elapsedSeconds) {
@@ -495,32 +562,48 @@ Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double ela
 }
 
 Status JobStore::appendFlush(const std::string& id, const ChainFlush& flush, double elapsedSeconds,
-                             uint64_t* tailBytes) {
-  const std::string record = encodeFlush(flush);  // compression outside the lock
+                             uint64_t* tailBytes, const EncodedSplats* wire) {
+  const std::string record = encodeFlush(flush, wire);  // outside the lock
+  const std::string what = "cannot record flush " + std::to_string(flush.flushIndex) +
+                           " of chain " + std::to_string(flush.chainIndex) + " of job " + id;
   std::lock_guard<std::mutex> lock(mutex_);
+  FlushLog* log = nullptr;
+  if (Status st = openLogLocked(id, &log); !st.isOk()) return st;
+  // The record goes beside the database, on disk before the row that points at it is
+  // committed: a flush's bytes are written once (a blob in SQLite's WAL is written twice, page
+  // by page), and a crash between the two leaves bytes that no row points at.
+  for (size_t done = 0; done < record.size();) {
+    const ssize_t n =
+        ::pwrite(log->fd, record.data() + done, record.size() - done, off_t(log->end + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return Status::internal(what + ": " + logPath(id) + ": " + std::strerror(errno));
+    done += size_t(n);
+  }
+  if (::fdatasync(log->fd) != 0) {
+    return Status::internal(what + ": " + logPath(id) + ": " + std::strerror(errno));
+  }
   int64_t tail = 0;
-  Status st =
-      transaction("cannot record flush " + std::to_string(flush.flushIndex) + " of chain " +
-                      std::to_string(flush.chainIndex) + " of job " + id,
-                  [&] {
-                    if (!Statement(db_,
-                                   "INSERT INTO flushes(job, seq, record) VALUES(?1, "
-                                   "(SELECT IFNULL(MAX(seq), 0) + 1 FROM flushes "
-                                   "WHERE job = ?1), ?2)")
-                             .bind(1, id)
-                             .blob(2, record)
-                             .run()) {
-                      return false;
-                    }
-                    Statement update(db_,
-                                     "UPDATE jobs SET elapsed = ?, tail_bytes = "
-                                     "tail_bytes + ? WHERE id = ? RETURNING tail_bytes");
-                    update.bind(1, elapsedSeconds).bind(2, int64_t(record.size())).bind(3, id);
-                    if (update.step() != SQLITE_ROW) return false;
-                    tail = update.integer(0);
-                    return update.step() == SQLITE_DONE;
-                  });
-  if (st.isOk() && tailBytes) *tailBytes = uint64_t(tail);
+  Status st = transaction(what, [&] {
+    if (!Statement(db_,
+                   "INSERT INTO flushes(job, seq, offset, length) VALUES(?1, "
+                   "(SELECT IFNULL(MAX(seq), 0) + 1 FROM flushes WHERE job = ?1), ?2, ?3)")
+             .bind(1, id)
+             .bind(2, int64_t(log->end))
+             .bind(3, int64_t(record.size()))
+             .run()) {
+      return false;
+    }
+    Statement update(db_,
+                     "UPDATE jobs SET elapsed = ?, tail_bytes = tail_bytes + ? WHERE id = ? "
+                     "RETURNING tail_bytes");
+    update.bind(1, elapsedSeconds).bind(2, int64_t(record.size())).bind(3, id);
+    if (update.step() != SQLITE_ROW) return false;
+    tail = update.integer(0);
+    return update.step() == SQLITE_DONE;
+  });
+  if (!st.isOk()) return st;  // the bytes stay unreferenced; the next append overwrites them
+  log->end += record.size();
+  if (tailBytes) *tailBytes = uint64_t(tail);
   return st;
 }
 
@@ -528,7 +611,7 @@ Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapsh
                             const std::vector<ChainScheduler::ChainSnapshot>& chains) {
   const std::string record = encodeCheckpoint(sums, chains);
   std::lock_guard<std::mutex> lock(mutex_);
-  return transaction("cannot checkpoint job " + id, [&] {
+  Status st = transaction("cannot checkpoint job " + id, [&] {
     return Statement(db_, "INSERT OR REPLACE INTO checkpoints(job, record) VALUES(?, ?)")
                .bind(1, id)
                .blob(2, record)
@@ -536,6 +619,8 @@ Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapsh
            Statement(db_, "UPDATE jobs SET tail_bytes = 0 WHERE id = ?").bind(1, id).run() &&
            Statement(db_, "DELETE FROM flushes WHERE job = ?").bind(1, id).run();
   });
+  if (st.isOk()) resetLogLocked(id);
+  return st;
 }
 
 Status JobStore::addErrorSample(const std::string& id, uint32_t index, const ErrorSample& e) {
@@ -596,12 +681,20 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
       job.checkpoint = std::move(snapshot);
     }
     if (job.phase == JobPhase::kRendering) {
-      Statement tail(db_, "SELECT record FROM flushes WHERE job = ? ORDER BY seq");
+      Statement tail(db_, "SELECT offset, length FROM flushes WHERE job = ? ORDER BY seq");
       tail.bind(1, job.id);
       int trc;
+      std::ifstream log;
+      std::string record;
       while ((trc = tail.step()) == SQLITE_ROW) {
+        if (!log.is_open()) log.open(logPath(job.id), std::ios::binary);
+        record.resize(size_t(tail.integer(1)));
+        if (!log.seekg(std::streamoff(tail.integer(0))) ||
+            !log.read(record.data(), std::streamsize(record.size()))) {
+          return corrupt("the flush log " + logPath(job.id) + " ends before a recorded flush");
+        }
         ChainFlush flush;
-        if (!decodeFlush(tail.bytes(0), &flush, &problem)) return corrupt(problem);
+        if (!decodeFlush(record, &flush, &problem)) return corrupt(problem);
         job.tail.push_back(std::move(flush));
       }
       if (trc != SQLITE_DONE) return fail("cannot read the flushes of job " + job.id);

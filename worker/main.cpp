@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -99,8 +100,13 @@ int main(int argc, char** argv) {
   }
   runner.join();
   const farm::WorkerPoolStats stats = pool.stats();
+  char streaming[160];
+  std::snprintf(streaming, sizeof streaming,
+                "; streaming flushes took %.2f s of %.2f s of chain time (%.1f%%)",
+                stats.uploadSeconds, stats.chainSeconds,
+                stats.chainSeconds > 0 ? 100.0 * stats.uploadSeconds / stats.chainSeconds : 0.0);
   log("done: " + std::to_string(stats.chainsStarted) + " chains run, " +
-      std::to_string(stats.flushesAccepted) + " flushes accepted");
+      std::to_string(stats.flushesAccepted) + " flushes accepted" + streaming);
   if (!refused.empty()) {
     std::cerr << "farm-worker: " << refused << "\n";
     return 1;

@@ -47,15 +47,18 @@ WorkerPoolStats WorkerPool::stats() const {
 void WorkerPool::runTask(Task* task) {
   const LeasedChain& chain = task->chain;
   bool failed = false;
+  const Clock::time_point started = Clock::now();
   try {
     std::shared_ptr<const RenderJob> job = source_->renderJob(chain);
     job->runChain(
         chain.spec,
         [&](ChainFlush&& flush) {
           const int64_t work = flush.mutations;
+          const Clock::time_point sending = Clock::now();
           FlushReceipt receipt = source_->upload(chain, std::move(flush));
           {
             std::lock_guard<std::mutex> lock(mutex_);
+            stats_.uploadSeconds += std::chrono::duration<double>(Clock::now() - sending).count();
             if (receipt.accepted) {
               ++stats_.flushesAccepted;
               stats_.work += work;
@@ -76,6 +79,7 @@ void WorkerPool::runTask(Task* task) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (failed) ++stats_.chainsFailed;
+    stats_.chainSeconds += std::chrono::duration<double>(Clock::now() - started).count();
     task->done = true;
   }
   wake_.notify_all();

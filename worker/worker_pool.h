@@ -29,6 +29,9 @@ struct WorkerPoolStats {
   int64_t chainsStarted = 0, chainsFailed = 0;
   int64_t flushesAccepted = 0, flushesDuplicate = 0;
   int64_t work = 0;  // mutations or samples in accepted flushes
+  // Chain threads' time, and of it the time spent handing flushes over (encoding, uploading,
+  // waiting for the answer): the chain renders nothing meanwhile.
+  double chainSeconds = 0, uploadSeconds = 0;
 };
 
 class WorkerPool {
