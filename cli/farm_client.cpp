@@ -64,6 +64,7 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->normalizationStdError = m.normalization_std_error();
   p->loadSeconds = m.load_seconds();
   p->bootstrapSeconds = m.bootstrap_seconds();
+  p->bootstrapCandidates = m.bootstrap_candidates();
   p->renderSeconds = m.render_seconds();
   p->chainsTotal = m.chains_total();
   p->chainsFinished = m.chains_finished();

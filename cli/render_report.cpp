@@ -15,6 +15,18 @@ std::string format(const char* fmt, double value) {
   return buffer;
 }
 
+double relativeZError(const JobProgress& p) {
+  return p.normalization > 0 ? p.normalizationStdError / p.normalization : 0.0;
+}
+
+// The relative error of an average pixel after the work done, were every unit of work one
+// independent splat: 1/sqrt(work per pixel). A model: chains' correlation makes it larger, BDPT's
+// strategies and expected-value splatting (several splats a mutation) smaller.
+double pixelErrorModel(const JobProgress& p) {
+  const double perPixel = p.width > 0 && p.height > 0 ? double(p.workDone) / p.width / p.height : 0;
+  return perPixel > 0 ? 1 / std::sqrt(perPixel) : 0.0;
+}
+
 const char* workUnit(const RenderSettings& s) {
   if (s.algorithm == Algorithm::ERPT) return "seeds";
   return isMarkovChain(s.algorithm) ? "mutations" : "samples";
@@ -145,6 +157,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["normalization_std_error"] = p.normalizationStdError;
   j["load_seconds"] = p.loadSeconds;
   j["bootstrap_seconds"] = p.bootstrapSeconds;
+  j["bootstrap_candidates"] = p.bootstrapCandidates;
   j["render_seconds"] = p.renderSeconds;
   j["chains_total"] = p.chainsTotal;
   j["chains_finished"] = p.chainsFinished;
@@ -182,11 +195,16 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   out << "render: " << scene << ", " << algorithmName(s.algorithm) << ", " << p.width << "x"
       << p.height << ", seed " << s.seed << "\n";
   const double pixels = double(p.width) * p.height;
+  const double zError = relativeZError(p);
   if (needsBootstrap(s.algorithm)) {
+    // Z scales every pixel alike, so its error is set beside the model of an average pixel's
+    // own that sized it (common/mcmc/bootstrap_size.h); the error line below, with a
+    // reference, gives the measured share.
     out << "  Z = " << format("%.6g", p.normalization) << " +- "
-        << format("%.3g", p.normalizationStdError) << " (standard error, "
-        << format("%.3g", p.normalization > 0 ? 100 * p.normalizationStdError / p.normalization : 0)
-        << "%)\n";
+        << format("%.3g", p.normalizationStdError) << " (standard error "
+        << format("%.3g", 100 * zError) << "%, from " << p.bootstrapCandidates
+        << " candidates; an average pixel's at one splat per unit of work: "
+        << format("%.3g", 100 * pixelErrorModel(p)) << "%)\n";
   }
   out << "  " << workUnit(s) << ": " << p.workDone << " ("
       << format("%.2f", pixels > 0 ? p.workDone / pixels : 0) << " per pixel), "
@@ -204,7 +222,12 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   if (!p.errorSeries.empty()) {
     const ErrorSample& e = p.errorSeries.back();
     out << "  error vs " << referencePath << ": rmse " << format("%.6g", e.rmse) << ", relMSE "
-        << format("%.6g", e.relMse) << "\n";
+        << format("%.6g", e.relMse);
+    if (needsBootstrap(s.algorithm) && e.relMse > 0) {
+      out << " (Z's standard error alone would make about "
+          << format("%.2g", 100 * zError * zError / e.relMse) << "% of it)";
+    }
+    out << "\n";
   }
   return out.str();
 }
@@ -252,6 +275,8 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
       {"large_step_probability", p.settings.largeStepProbability},
   };
   j["bootstrap_share"] = p.elapsedSeconds > 0 ? p.bootstrapSeconds / p.elapsedSeconds : 0.0;
+  j["normalization_relative_std_error"] = relativeZError(p);
+  j["pixel_error_model"] = pixelErrorModel(p);
   nlohmann::json series = nlohmann::json::array();
   for (const ErrorSample& e : p.errorSeries) {
     series.push_back({{"elapsed_seconds", e.elapsedSeconds},

@@ -96,6 +96,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   m->set_normalization(p.normalization);
   m->set_normalization_std_error(p.normalizationStdError);
   m->set_bootstrap_seconds(p.bootstrapSeconds);
+  m->set_bootstrap_candidates(p.bootstrapCandidates);
   m->set_chains_total(p.chainsTotal);
   m->set_chains_finished(p.chainsFinished);
   m->set_chains_leased(p.chainsLeased);

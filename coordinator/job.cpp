@@ -168,8 +168,13 @@ void Job::prepare() {
     std::string z;
     if (needsBootstrap(spec_.settings.algorithm)) {
       z = ", Z = " + std::to_string(bootstrap_.normalization) + " +- " +
-          std::to_string(bootstrap_.normalizationStdError) + " after " +
-          std::to_string(bootstrap_.seconds) + " s of bootstrap";
+          std::to_string(bootstrap_.normalizationStdError) + " from " +
+          std::to_string(bootstrap_.candidates) + " candidates in " +
+          std::to_string(bootstrap_.seconds) + " s";
+      if (bootstrap_.candidatesForTime > 0 || bootstrap_.candidatesForError > 0) {
+        z += " (the time share allows " + std::to_string(bootstrap_.candidatesForTime) +
+             ", Z's error asks for " + std::to_string(bootstrap_.candidatesForError) + ")";
+      }
     }
     log("rendering " + std::to_string(count) + " chains (" + std::to_string(width_) + "x" +
         std::to_string(height_) + ", " + algorithmName(spec_.settings.algorithm) + z + ")");
@@ -559,6 +564,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   p.bootstrapSeconds = bootstrap_.seconds;
   p.normalization = bootstrap_.normalization;
   p.normalizationStdError = bootstrap_.normalizationStdError;
+  p.bootstrapCandidates = bootstrap_.candidates;
   p.plannedWork = plannedWork_;
   p.width = width_;
   p.height = height_;

@@ -68,6 +68,7 @@ struct JobProgress {
   std::vector<std::string> setAside;   // workers the job leases no more chains to, and why
   double raysPerSecond = 0;
   double normalization = 0, normalizationStdError = 0;
+  int64_t bootstrapCandidates = 0;
   double loadSeconds = 0, bootstrapSeconds = 0, renderSeconds = 0;
   uint32_t chainsTotal = 0, chainsFinished = 0, chainsLeased = 0;
   bool hasReference = false;

@@ -313,6 +313,33 @@ TEST(ClusterCoordinatorCrash, KilledCoordinatorResumesEveryJob) {
   EXPECT_EQ(coordinator->process().stop(), 0);
 }
 
+// `farm render --bootstrap-candidates`: a count the user gives is the count drawn, the default
+// sizes the bootstrap to the job (a small one gets the pilot), and a count out of range is a
+// clear error.
+TEST(FarmRender, BootstrapCandidatesOption) {
+  ScratchDir scratch("bootstrap-option");
+  ASSERT_FALSE(scratch.path().empty());
+  auto render = [&](std::vector<std::string> extra) {
+    std::vector<std::string> argv = {FARM_CLI_BIN, "render",    kScene,     "-o", scratch / "b.exr",
+                                     "--width",    "32",        "--height", "32", "--mpp",
+                                     "4",          "--threads", "2"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return runCommand(argv, seconds(120), scratch.path());
+  };
+  CommandResult given = render({"--bootstrap-candidates", "5000"});
+  ASSERT_EQ(given.exitCode, 0) << given.err;
+  EXPECT_NE(given.out.find("from 5000 candidates"), std::string::npos) << given.out;
+  CommandResult sized = render({});
+  ASSERT_EQ(sized.exitCode, 0) << sized.err;
+  EXPECT_NE(sized.out.find("from 4096 candidates"), std::string::npos) << sized.out;
+  for (const char* bad : {"-1", "100000000000"}) {
+    CommandResult refused = render({"--bootstrap-candidates", bad});
+    EXPECT_NE(refused.exitCode, 0) << bad;
+    EXPECT_NE(refused.err.find("--bootstrap-candidates must be in 0..67108864"), std::string::npos)
+        << bad << ": " << refused.err;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Algorithms, ClusterTest,
     ::testing::Values(ClusterCase{"pt", {"--spp", "64"}}, ClusterCase{"bdpt", {"--spp", "16"}},

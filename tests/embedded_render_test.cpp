@@ -83,6 +83,36 @@ TEST(EmbeddedRender, ReferenceGivesAnErrorSeries) {
   EXPECT_LT(last.relMse, result.progress.errorSeries.front().relMse + 1e-12);
 }
 
+// A Markov chain job that leaves the bootstrap to size itself: its progress carries the count
+// and the report sets Z's error beside the pixel model and, against a reference, says what share
+// of the relative MSE it alone makes ((Z's relative error)^2 / relMSE).
+TEST(EmbeddedRender, ReportShowsTheBootstrapsSizeAndZsShareOfTheError) {
+  EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 2, 1);
+  const std::string reference = std::string(FARM_SHARED_DIR) + "/references/cornell-box-256.exr";
+  o.settings.width = o.settings.height = 256;  // the reference's size
+  o.settings.mutationsPerPixel = 2;
+  o.settings.bootstrapSamples = 0;
+  o.referencePath = reference;
+  EmbeddedRenderResult result;
+  Status s = renderEmbedded(o, &result);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  const JobProgress& p = result.progress;
+  // 256 x 256 x 2 mutations: 5% of them is 6898 candidates, more than the pilot.
+  EXPECT_EQ(p.bootstrapCandidates, 6898);
+  const double zRel = p.normalizationStdError / p.normalization;
+  ASSERT_GT(zRel, 0);
+  const nlohmann::json j = progressJson(p);
+  EXPECT_EQ(j["bootstrap_candidates"].get<int64_t>(), 6898);
+  const std::string report = finalReport(p, "cornell-box", reference);
+  EXPECT_NE(report.find("from 6898 candidates"), std::string::npos) << report;
+  EXPECT_NE(report.find("at one splat per unit of work: 70.7%"), std::string::npos) << report;
+  ASSERT_FALSE(p.errorSeries.empty());
+  const double share = 100 * zRel * zRel / p.errorSeries.back().relMse;
+  char expected[96];
+  std::snprintf(expected, sizeof(expected), "alone would make about %.2g%% of it", share);
+  EXPECT_NE(report.find(expected), std::string::npos) << expected << "\n" << report;
+}
+
 TEST(EmbeddedRender, MissingLightIsAClearError) {
   EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 1, 1);
   o.scenePath = "/nonexistent/scene.xml";

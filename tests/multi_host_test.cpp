@@ -166,7 +166,7 @@ TEST(MultiHost, WorkersJoinLeaveAndDieAcrossHostsAndTheImageIsUnchanged) {
   auto first = startWorker(1, 1);
   auto second = startWorker(2, 1);
   const std::vector<std::string> settings = {
-      "--algorithm", "mlt", "--width", "64", "--height", "48", "--seed", "4", "--mpp", "512"};
+      "--algorithm", "mlt", "--width", "64", "--height", "48", "--seed", "4", "--mpp", "2048"};
   std::vector<std::string> submit = {"submit", kScene};
   submit.insert(submit.end(), settings.begin(), settings.end());
   CommandResult submitted = client(submit);
@@ -182,7 +182,7 @@ TEST(MultiHost, WorkersJoinLeaveAndDieAcrossHostsAndTheImageIsUnchanged) {
   done = waitForMore(job, done);
   second->signal(SIGKILL);  // dies mid-job
   EXPECT_EQ(second->wait(seconds(10)), 128 + SIGKILL);
-  const int64_t total = int64_t(64) * 48 * 512;
+  const int64_t total = int64_t(64) * 48 * 2048;
   EXPECT_LT(done, total) << "the job ended before the worker died";
   auto firstAgain = startWorker(1, 2);  // comes back on its host
 

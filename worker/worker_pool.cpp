@@ -133,6 +133,13 @@ void WorkerPool::run() {
       }
       lock.lock();
       for (LeasedChain& chain : leases) {
+        // Named when it starts, so a log shows where every chain ran (and, after a failure,
+        // how soon another worker took it up).
+        log(chainName(chain) + " leased (epoch " + std::to_string(chain.epoch) +
+            (chain.spec.resumeFlushIndex > 0
+                 ? ", resuming at flush " + std::to_string(chain.spec.resumeFlushIndex)
+                 : std::string(", from its seed")) +
+            ")");
         auto task = std::make_unique<Task>();
         task->chain = std::move(chain);
         Task* raw = task.get();

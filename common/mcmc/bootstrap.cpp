@@ -90,32 +90,42 @@ BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, 
                                        uint64_t seed, int64_t count,
                                        const std::function<bool(double)>& progress) {
   BootstrapCandidates out;
-  out.contributions.assign(size_t(count), 0.0);
+  if (!extendCandidates(scene, algorithm, maxDepth, seed, count, &out, progress)) return {};
+  return out;
+}
+
+bool extendCandidates(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
+                      int64_t count, BootstrapCandidates* out,
+                      const std::function<bool(double)>& progress) {
+  const int64_t first = int64_t(out->contributions.size());
+  if (count <= first) return true;
+  out->contributions.resize(size_t(count), 0.0);
   // Rounds of parallel work with a progress report (and a chance to cancel) between them; the
   // candidates do not depend on the rounds or the threads.
-  const int64_t round = std::max<int64_t>(count / 20, 4096);
-  for (int64_t begin = 0; begin < count; begin += round) {
+  const int64_t round = std::max<int64_t>((count - first) / 20, 4096);
+  for (int64_t begin = first; begin < count; begin += round) {
     const int64_t end = std::min(count, begin + round);
     tbb::parallel_for(
         tbb::blocked_range<int64_t>(begin, end, 256), [&](const tbb::blocked_range<int64_t>& r) {
           for (int64_t i = r.begin(); i < r.end(); ++i) {
-            out.contributions[size_t(i)] = evaluateCandidate(scene, algorithm, maxDepth, seed, i);
+            out->contributions[size_t(i)] = evaluateCandidate(scene, algorithm, maxDepth, seed, i);
           }
         });
-    if (progress && !progress(double(end) / double(count))) return BootstrapCandidates();
+    if (progress && !progress(double(end - first) / double(count - first))) return false;
   }
   // Mean and standard error in double, summed in index order: the same on every host.
   double sum = 0, sumSq = 0;
-  for (double c : out.contributions) {
+  out->nonZero = 0;
+  for (double c : out->contributions) {
     sum += c;
     sumSq += c * c;
-    if (c > 0) ++out.nonZero;
+    if (c > 0) ++out->nonZero;
   }
   const double n = double(count);
-  out.mean = sum / n;
-  double variance = count > 1 ? std::max(0.0, (sumSq - n * out.mean * out.mean) / (n - 1)) : 0;
-  out.stdError = std::sqrt(variance / n);
-  return out;
+  out->mean = sum / n;
+  double variance = count > 1 ? std::max(0.0, (sumSq - n * out->mean * out->mean) / (n - 1)) : 0;
+  out->stdError = std::sqrt(variance / n);
+  return true;
 }
 
 std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n, uint64_t seed) {

@@ -17,6 +17,10 @@ struct BootstrapCandidates {
   std::vector<double> contributions;  // I(u_i) per candidate
   double mean = 0, stdError = 0;
   int64_t nonZero = 0;
+  // Var(I) / mean(I)^2, the square of Z's relative standard error times the count.
+  double relativeVariance() const {
+    return mean > 0 ? stdError * stdError * double(contributions.size()) / (mean * mean) : 0.0;
+  }
 };
 
 // I(u) for the candidate with index i of a job with `seed`: the algorithm's primary-sample
@@ -41,6 +45,13 @@ bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t inde
 BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, int maxDepth,
                                        uint64_t seed, int64_t count,
                                        const std::function<bool(double)>& progress = {});
+
+// Candidates `out->contributions.size()` .. count-1 added to `out` (the first ones as
+// generateCandidates() made them), and the figures over all of them; false when cancelled (then
+// `out` is unusable).
+bool extendCandidates(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
+                      int64_t count, BootstrapCandidates* out,
+                      const std::function<bool(double)>& progress = {});
 
 // Draws `n` candidate indices with probability proportional to contribution (systematic
 // resampling with one random offset, which keeps the draws stratified).

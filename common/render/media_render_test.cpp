@@ -36,9 +36,15 @@ Image renderSmokyBox(Algorithm algorithm, int64_t budget, uint64_t seed, double*
   RenderSettings s;
   s.mediumSamples = mediumSamples;
   s.mediumMarchSteps = marchSteps;
-  // Path-space candidates cost most here (manifold next-event estimation through the water
-  // ball): a quarter of the default, whose larger error in Z the comparison counts.
-  if (algorithm == Algorithm::MLT) s.bootstrapSamples = 1 << 16;
+  // Z scales a chain's whole image alike, so its error enters the squared differences of
+  // compare() as one term with one degree of freedom; the job-sized bootstrap keeps it within a
+  // third of an average pixel's error, which at 24x24 leaves that ratio at the mercy of two
+  // draws. The comparison is of the chains' transport through media, so Z is measured well:
+  // 2^18 candidates, and for path-space ones, which cost most here (manifold next-event
+  // estimation through the water ball), 2^16, whose larger error the means' comparison counts.
+  if (needsBootstrap(algorithm)) {
+    s.bootstrapSamples = algorithm == Algorithm::MLT ? 1 << 16 : 1 << 18;
+  }
   s.algorithm = algorithm;
   s.samplesPerPixel = budget;
   s.mutationsPerPixel = budget;

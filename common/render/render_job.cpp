@@ -9,6 +9,7 @@
 #include "common/chain/chain_flusher.h"
 #include "common/film/splat_buffer.h"
 #include "common/mcmc/bootstrap.h"
+#include "common/mcmc/bootstrap_size.h"
 #include "common/mcmc/erpt.h"
 #include "common/mcmc/mlt_chain.h"
 #include "common/mcmc/pssmlt_chain.h"
@@ -117,16 +118,53 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   if (!needsBootstrap(settings_.algorithm)) return result;
   auto start = std::chrono::steady_clock::now();
   const int64_t pixels = int64_t(width()) * height();
-  int64_t count = settings_.bootstrapSamples > 0
-                      ? settings_.bootstrapSamples
-                      : std::clamp<int64_t>(4 * pixels, int64_t(1) << 18, int64_t(1) << 22);
   if (scene_->lights().empty()) {
     throw std::runtime_error("no light reaches the camera: the scene has no emitters");
   }
-  BootstrapCandidates c = generateCandidates(
-      *scene_, settings_.algorithm, resolvedMaxDepth(settings_, *scene_), settings_.seed, count,
-      [&](double f) { return !progress || progress(Progress{f}); });
-  if (c.contributions.empty()) throw std::runtime_error("bootstrap cancelled");
+  const int maxDepth = resolvedMaxDepth(settings_, *scene_);
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  BootstrapCandidates c;
+  auto extend = [&](int64_t count) {
+    if (!extendCandidates(*scene_, settings_.algorithm, maxDepth, settings_.seed, count, &c,
+                          [&](double f) { return !progress || progress(Progress{f}); })) {
+      throw std::runtime_error("bootstrap cancelled");
+    }
+  };
+  int64_t count = settings_.bootstrapSamples;
+  if (count > 0) {
+    extend(count);
+  } else {
+    // The pilot, doubled until enough of it carries light to measure the relative variance.
+    count = kBootstrapPilot;
+    extend(count);
+    while (c.nonZero < kBootstrapPilotLight && count < kBootstrapPilotMax) {
+      count = std::min(2 * count, kBootstrapPilotMax);
+      extend(count);
+    }
+    const int64_t work = plannedWork();
+    if (work > 0) {
+      const BootstrapSize size =
+          bootstrapSize(settings_.algorithm, work, pixels, c.relativeVariance());
+      result.candidatesForTime = size.forTime;
+      result.candidatesForError = size.forError;
+      count = std::max(count, size.candidates);
+      extend(count);
+    } else if (settings_.timeBudgetSeconds > 0) {
+      // A time budget: candidates until kBootstrapShare of it is spent, at the rate measured so
+      // far (no job-independent count exists, and the work such a job does differs per run).
+      const double budget = kBootstrapShare * settings_.timeBudgetSeconds;
+      while (count < kBootstrapMaxCandidates && elapsed() < budget) {
+        const double rate = double(count) / std::max(elapsed(), 1e-6);
+        const int64_t more = int64_t(std::min(rate * (budget - elapsed()), double(count)));
+        if (more < kBootstrapPilot) break;
+        count = std::min(count + more, kBootstrapMaxCandidates);
+        extend(count);
+      }
+      result.candidatesForTime = count;
+    }
+  }
   if (!(c.mean > 0)) {
     throw std::runtime_error("no light reaches the camera: none of " + std::to_string(count) +
                              " bidirectional candidate paths carries light");
@@ -143,7 +181,6 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   const int chains = settings_.numChains > 0 ? settings_.numChains : kDefaultChains;
   std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
   const std::vector<double>& contributions = c.contributions;
-  const int maxDepth = resolvedMaxDepth(settings_, *scene_);
   for (size_t c = 0; c < picks.size(); ++c) {
     const int64_t i = picks[c];
     if (settings_.algorithm == Algorithm::MLT) {

@@ -25,6 +25,9 @@ struct BootstrapResult {
   double normalizationStdError = 0;
   int64_t candidates = 0;         // candidate paths generated
   int64_t nonZeroCandidates = 0;  // of them, those carrying light
+  // What sized the count (common/mcmc/bootstrap_size.h), when the settings did not fix it: the
+  // count the time share allows and the one Z's error asks for (0: not asked).
+  int64_t candidatesForTime = 0, candidatesForError = 0;
   double seconds = 0;
   // Seeds resampled in proportion to weight, one per chain: the primary-sample vector (or, for
   // mlt, the serialized path) and its scalar contribution.

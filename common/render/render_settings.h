@@ -16,7 +16,7 @@ struct RenderSettings {
   uint64_t seed = 1;
   int maxDepth = 0;  // 0: the scene's; else the longest path in edges
   // Markov chain settings (PSSMLT)
-  int64_t bootstrapSamples = 0;       // candidate paths; 0: a default from the film size
+  int64_t bootstrapSamples = 0;       // candidate paths; 0: sized to the job (bootstrap_size.h)
   int numChains = 0;                  // independent chains (work units); 0: default
   float largeStepProbability = 0.3f;  // Kelemen et al. 2002, section 4
   MutationMix mutationMix;            // mlt: how often each of Veach's mutations is proposed

@@ -73,11 +73,14 @@ TEST(VeachAjar, Pssmlt) {
 TEST(VeachAjar, PssmltOverPathTracing) {
   expectRendersWithTextures(Algorithm::PSSMLTOverPT, 32);
 }
+// The Markov chains need more work than the samplers before every seed shows the picture: at
+// mmlt 128 and mlt 16 per pixel about one seed in five leaves its top and bottom alike (the
+// chains that reach it are few), at these counts none of seeds 7..12 does.
 TEST(VeachAjar, Multiplexed) {
-  expectRendersWithTextures(Algorithm::MMLT, 128);
+  expectRendersWithTextures(Algorithm::MMLT, 512);
 }
 TEST(VeachAjar, PathSpace) {
-  expectRendersWithTextures(Algorithm::MLT, 16);
+  expectRendersWithTextures(Algorithm::MLT, 128);
 }
 TEST(VeachAjar, EnergyRedistribution) {
   expectRendersWithTextures(Algorithm::ERPT, 1);
