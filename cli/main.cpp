@@ -53,6 +53,7 @@ struct RenderOptions {
   int mediumMarch = farm::RenderSettings().mediumMarchSteps;
   int chains = 64;
   int64_t bootstrapCandidates = 0;
+  int64_t flushEvery = 0;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -109,6 +110,13 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "candidate paths of the bootstrap that estimates Z and draws the chains' seeds "
                    "(pssmlt, pssmlt-pt, mmlt, mlt, erpt); 0 sizes it to the job: about 5% of its "
                    "work, more where Z's standard error would show beside an average pixel's")
+      ->default_str("0");
+  command
+      ->add_option("--flush-every", o->flushEvery,
+                   "mutations (or samples) a chain runs between flushes to the coordinator; 0: "
+                   "one film's worth (the pixel count, within 4096 .. 2^20). Longer: fewer, "
+                   "denser uploads for a coordinator with many workers, and more work lost with "
+                   "a worker that dies")
       ->default_str("0");
   o->timeOption = command->add_option(
       "--time", o->time,
@@ -174,6 +182,7 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
   }
   s->numChains = o.chains;
   s->bootstrapSamples = o.bootstrapCandidates;
+  s->flushInterval = o.flushEvery;
   if (!farm::parseMutationMix(o.mutationMix, &s->mutationMix, error)) {
     *error = "--mutation-mix: " + *error;
     return false;

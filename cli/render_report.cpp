@@ -271,6 +271,7 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
       {"seed", p.settings.seed},
       {"max_depth", p.settings.maxDepth},
       {"bootstrap_samples", p.settings.bootstrapSamples},
+      {"flush_interval", p.settings.flushInterval},
       {"num_chains", p.settings.numChains},
       {"large_step_probability", p.settings.largeStepProbability},
   };

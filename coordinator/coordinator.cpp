@@ -364,4 +364,14 @@ Status Coordinator::acceptFlush(const std::string& workerId, const std::string& 
   return job->acceptFlush(workerId, epoch, std::move(flush), SteadyClock::now(), ack, wire);
 }
 
+Status Coordinator::acceptBatch(const std::string& workerId, const std::string& jobId,
+                                FlushBatch&& batch, std::vector<FlushAck>* acks,
+                                const EncodedSplats* wire) {
+  Status status = findWorker(workerId, nullptr);
+  if (!status.isOk()) return status;
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  return job->acceptBatch(workerId, std::move(batch), SteadyClock::now(), acks, wire);
+}
+
 }  // namespace farm

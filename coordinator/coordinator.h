@@ -90,6 +90,9 @@ class Coordinator {
   // `wire`: the splats as they arrived (proto/splat_codec.h), kept so by a durable store.
   Status acceptFlush(const std::string& workerId, const std::string& jobId, uint64_t epoch,
                      ChainFlush&& flush, FlushAck* ack, const EncodedSplats* wire = nullptr);
+  // Several chains' flushes of one job summed into one film (Job::acceptBatch).
+  Status acceptBatch(const std::string& workerId, const std::string& jobId, FlushBatch&& batch,
+                     std::vector<FlushAck>* acks, const EncodedSplats* wire = nullptr);
 
   // Expires leases, enforces time budgets, finishes jobs; also runs on a timer. Tests pass a
   // later `now` to make leases expire without waiting for them.

@@ -543,15 +543,25 @@ class WorkerService final : public v1::WorkerApi::Service {
       return invalid("flush ended after " + std::to_string(bytes.size()) + " of " +
                      std::to_string(expectedBytes) + " splat bytes");
     }
+    const bool batch = header.entries_size() > 0;
+    if (size_t(header.entries_size()) > kMaxBatchEntries) {
+      return invalid("a batch holds " + std::to_string(header.entries_size()) +
+                     " flushes; at most " + std::to_string(kMaxBatchEntries));
+    }
     Sha256 digest;
     digest.update(bytes);
-    digest.update(header.state());
+    if (batch) {
+      for (const v1::BatchEntry& e : header.entries()) digest.update(e.state());
+    } else {
+      digest.update(header.state());
+    }
     const std::string actual = digest.hexDigest();
     if (actual != header.checksum()) {
       return {grpc::StatusCode::DATA_LOSS,
               "checksum mismatch: the header says " + header.checksum() +
                   ", the received splats and state hash to " + actual + " (resend the flush)"};
     }
+    if (batch) return acceptBatch(header, std::move(bytes), values, response);
     ChainFlush flush;
     flush.chainIndex = header.chain_index();
     flush.flushIndex = header.flush_index();
@@ -587,17 +597,7 @@ class WorkerService final : public v1::WorkerApi::Service {
     s = coordinator_->acceptFlush(header.worker_id(), header.job_id(), header.epoch(),
                                   std::move(flush), &ack, &encoded);
     if (!s.isOk()) return toGrpc(s);
-    switch (ack.result) {
-      case FlushAck::Result::kAccepted:
-        response->set_result(v1::UploadFlushResponse::ACCEPTED);
-        break;
-      case FlushAck::Result::kDuplicate:
-        response->set_result(v1::UploadFlushResponse::DUPLICATE);
-        break;
-      case FlushAck::Result::kDiscarded:
-        response->set_result(v1::UploadFlushResponse::DISCARDED);
-        break;
-    }
+    response->set_result(toResult(ack.result));
     response->set_stop(ack.stop);
     response->set_reason(ack.reason);
     response->set_yielded(ack.yielded);
@@ -605,6 +605,65 @@ class WorkerService final : public v1::WorkerApi::Service {
   }
 
  private:
+  static v1::UploadFlushResponse::Result toResult(FlushAck::Result r) {
+    switch (r) {
+      case FlushAck::Result::kAccepted:
+        return v1::UploadFlushResponse::ACCEPTED;
+      case FlushAck::Result::kDuplicate:
+        return v1::UploadFlushResponse::DUPLICATE;
+      case FlushAck::Result::kDiscarded:
+        return v1::UploadFlushResponse::DISCARDED;
+      case FlushAck::Result::kResend:
+        return v1::UploadFlushResponse::RESEND;
+      case FlushAck::Result::kRefused:
+        return v1::UploadFlushResponse::REFUSED;
+    }
+    return v1::UploadFlushResponse::RESULT_UNSPECIFIED;
+  }
+
+  // The rest of UploadFlush for a batch (FlushHeader.entries), its bytes received and checked.
+  grpc::Status acceptBatch(const v1::FlushHeader& header, std::string&& bytes, size_t values,
+                           v1::UploadFlushResponse* response) {
+    FlushBatch batch;
+    for (const v1::BatchEntry& e : header.entries()) {
+      batch.entries.push_back(::farm::fromProto(e));
+      batch.epochs.push_back(e.epoch());
+    }
+    batch.film.width = header.width();
+    batch.film.height = header.height();
+    EncodedSplats encoded;
+    encoded.sparse = header.sparse();
+    encoded.compressed = header.compressed();
+    encoded.rawBytes = header.raw_splat_bytes();
+    encoded.bytes = std::move(bytes);
+    std::string problem;
+    if (!decodeSplats(encoded, values, &batch.film.splats, &problem)) {
+      return invalid("a batch of " + std::to_string(header.entries_size()) +
+                     " flushes: " + problem);
+    }
+    std::vector<FlushAck> acks;
+    Status s = coordinator_->acceptBatch(header.worker_id(), header.job_id(), std::move(batch),
+                                         &acks, &encoded);
+    if (!s.isOk()) return toGrpc(s);
+    bool all[3] = {true, true, true};  // accepted, duplicate, discarded
+    for (size_t i = 0; i < acks.size(); ++i) {
+      v1::UploadFlushResponse::EntryResult* r = response->add_entries();
+      r->set_chain_index(header.entries(int(i)).chain_index());
+      r->set_result(toResult(acks[i].result));
+      r->set_stop(acks[i].stop);
+      r->set_reason(acks[i].reason);
+      r->set_yielded(acks[i].yielded);
+      all[0] &= acks[i].result == FlushAck::Result::kAccepted;
+      all[1] &= acks[i].result == FlushAck::Result::kDuplicate;
+      all[2] &= acks[i].result == FlushAck::Result::kDiscarded;
+    }
+    response->set_result(all[0]   ? v1::UploadFlushResponse::ACCEPTED
+                         : all[1] ? v1::UploadFlushResponse::DUPLICATE
+                         : all[2] ? v1::UploadFlushResponse::DISCARDED
+                                  : v1::UploadFlushResponse::RESEND);
+    return grpc::Status::OK;
+  }
+
   Coordinator* coordinator_;
 };
 

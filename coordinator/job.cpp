@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <set>
 
 #include "common/film/error_metrics.h"
 #include "common/scene/scene.h"
@@ -242,15 +243,17 @@ void Job::restore(StoredJob stored) {
     failLocked(std::string("cannot resume after a restart: ") + e.what());
     return;
   }
-  for (ChainFlush& flush : stored.tail) {
+  for (FlushBatch& batch : stored.tail) {
     std::string problem;
-    if (aggregator_->add(flush, &problem) != FlushOutcome::kAccepted) {
+    if (aggregator_->addBatch(batch, &problem) != FlushOutcome::kAccepted) {
       failLocked("cannot resume after a restart: the recorded flushes do not follow each other (" +
                  problem + ")");
       return;
     }
-    scheduler_->recordFlush(flush.chainIndex, flush.flushIndex, flush.mutations,
-                            std::move(flush.state), flush.finished, "", 0, now);
+    for (ChainFlush& flush : batch.entries) {
+      scheduler_->recordFlush(flush.chainIndex, flush.flushIndex, flush.mutations,
+                              std::move(flush.state), flush.finished, "", 0, now);
+    }
   }
   if (!stored.tail.empty() && store_) {
     // Fold the replayed log now, so that restarts in a row never replay more than one interval.
@@ -416,8 +419,20 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       return Status::invalidArgument("job " + id_ + ": " + problem);
   }
 
+  answerLocked(chain, worker, epoch, outcome == FlushOutcome::kAccepted, flush.finished,
+               flush.mutations, ack);
+  if (outcome == FlushOutcome::kAccepted) {
+    recordErrorLocked(now, false);
+    checkpointLocked();
+  }
+  finishIfCompleteLocked(now);
+  return Status::ok();
+}
+
+void Job::answerLocked(uint32_t chain, const std::string& worker, uint64_t epoch, bool accepted,
+                       bool finished, int64_t mutations, FlushAck* ack) {
   const bool holder = scheduler_->holds(worker, chain, epoch);
-  const bool chainEnds = flush.finished && outcome == FlushOutcome::kAccepted;
+  const bool chainEnds = finished && accepted;
   if (!chainEnds) {
     if (scheduler_->stopping()) {
       ack->stop = true;
@@ -427,8 +442,8 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       ack->stop = true;
       ack->reason = "this worker no longer holds the lease of chain " + std::to_string(chain) +
                     " (it expired, moved to another worker, or the chain finished)";
-    } else if (outcome == FlushOutcome::kAccepted && scheduler_->waitingCount() > 0 &&
-               flush.mutations > 0 && spec_.settings.timeBudgetSeconds > 0) {
+    } else if (accepted && scheduler_->waitingCount() > 0 && mutations > 0 &&
+               spec_.settings.timeBudgetSeconds > 0) {
       // A chain without a budget would keep its thread until the time is up, and the others
       // would never run: time-slice them at flush boundaries (the chain resumes exactly).
       ack->stop = true;
@@ -438,7 +453,104 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
       if (workFreed_) workFreed_();
     }
   }
-  if (outcome == FlushOutcome::kAccepted) {
+}
+
+Status Job::acceptBatch(const std::string& worker, FlushBatch&& batch, SteadyClock::time_point now,
+                        std::vector<FlushAck>* acks, const EncodedSplats* wire) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  acks->assign(batch.entries.size(), FlushAck());
+  if (batch.entries.empty() || batch.epochs.size() != batch.entries.size()) {
+    return Status::invalidArgument("a batch needs one lease epoch for each of its flushes");
+  }
+  if (isTerminal(phase_) || phase_ == JobPhase::kFinishing) {
+    for (FlushAck& ack : *acks) {
+      ack.result = FlushAck::Result::kDiscarded;
+      ack.stop = true;
+      ack.reason = std::string("job ") + id_ + " is " + jobPhaseName(phase_);
+    }
+    return Status::ok();
+  }
+  if (phase_ != JobPhase::kRendering) {
+    return Status::failedPrecondition("job " + id_ + " is " + jobPhaseName(phase_) +
+                                      "; it has no chains yet");
+  }
+  enforceBudgetLocked(now);
+  std::set<uint32_t> chains;
+  for (const ChainFlush& entry : batch.entries) {
+    if (!chains.insert(entry.chainIndex).second) {
+      return Status::invalidArgument("job " + id_ + ": the batch holds two flushes of chain " +
+                                     std::to_string(entry.chainIndex));
+    }
+  }
+  // The film is the batch's, not one chain's: when it is unsound, every chain in it is charged.
+  std::string problem;
+  FlushOutcome film = aggregator_->checkFilm(batch.film, "the batch's film", &problem);
+  if (film != FlushOutcome::kAccepted) {
+    for (uint32_t chain : chains) {
+      if (scheduler_->hasChain(chain)) countFailureLocked(worker, chain, problem);
+    }
+    return Status::invalidArgument("job " + id_ + ": " + problem);
+  }
+  // Each entry's verdict on its own; the batch counts only when every one is "the next flush".
+  std::vector<FlushOutcome> outcomes;
+  std::vector<std::string> problems(batch.entries.size());
+  size_t next = 0;
+  for (size_t i = 0; i < batch.entries.size(); ++i) {
+    outcomes.push_back(aggregator_->checkEntry(batch.entries[i], &problems[i]));
+    next += outcomes[i] == FlushOutcome::kAccepted;
+  }
+  const bool take = next == batch.entries.size();
+  if (take) {
+    if (store_) {
+      // Durable before it counts, as a single flush (acceptFlush).
+      Status recorded =
+          store_->appendBatch(id_, batch, secondsSince(submitted_, now), &tailBytes_, wire);
+      if (!recorded.isOk()) {
+        log(recorded.message());
+        return Status(StatusCode::kUnavailable,
+                      "job " + id_ + ": the coordinator cannot record flushes now (send it again)");
+      }
+    }
+    if (aggregator_->addBatch(batch, &problem) != FlushOutcome::kAccepted) {
+      return Status::internal("job " + id_ + ": a checked batch did not add: " + problem);
+    }
+  }
+  for (size_t i = 0; i < batch.entries.size(); ++i) {
+    ChainFlush& entry = batch.entries[i];
+    FlushAck& ack = (*acks)[i];
+    switch (outcomes[i]) {
+      case FlushOutcome::kAccepted:
+        if (take) {
+          scheduler_->recordFlush(entry.chainIndex, entry.flushIndex, entry.mutations,
+                                  std::move(entry.state), entry.finished, worker, batch.epochs[i],
+                                  now);
+          ack.result = FlushAck::Result::kAccepted;
+        } else {
+          ack.result = FlushAck::Result::kResend;  // sound, held back by another entry
+        }
+        break;
+      case FlushOutcome::kDuplicate:
+        ack.result = FlushAck::Result::kDuplicate;
+        break;
+      case FlushOutcome::kBadValues:
+      case FlushOutcome::kWrongSize:
+        countFailureLocked(worker, entry.chainIndex, problems[i]);
+        [[fallthrough]];
+      case FlushOutcome::kOutOfOrder:
+      case FlushOutcome::kUnknownChain:
+        ack.result = FlushAck::Result::kRefused;
+        ack.reason = problems[i];
+        break;
+    }
+    if (ack.result == FlushAck::Result::kAccepted || ack.result == FlushAck::Result::kDuplicate) {
+      if (scheduler_->hasChain(entry.chainIndex)) {
+        answerLocked(entry.chainIndex, worker, batch.epochs[i],
+                     ack.result == FlushAck::Result::kAccepted, entry.finished, entry.mutations,
+                     &ack);
+      }
+    }
+  }
+  if (take) {
     recordErrorLocked(now, false);
     checkpointLocked();
   }

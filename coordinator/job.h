@@ -87,7 +87,9 @@ struct WorkerLease {
 };
 
 struct FlushAck {
-  enum class Result { kAccepted, kDuplicate, kDiscarded };
+  // kResend and kRefused answer entries of a batch that was not taken (Job::acceptBatch): the
+  // first is sound and goes again without the others, the second is not (reason says why).
+  enum class Result { kAccepted, kDuplicate, kDiscarded, kResend, kRefused };
   Result result = Result::kAccepted;
   bool stop = false;     // the chain should stop
   std::string reason;    // why it should stop
@@ -137,6 +139,14 @@ class Job {
   Status acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& flush,
                      SteadyClock::time_point now, FlushAck* ack,
                      const EncodedSplats* wire = nullptr);
+  // A worker's summed upload of several chains' flushes (coordinator/splat_aggregator.h's
+  // FlushBatch), taken whole or not at all: when every entry is the next flush of its chain,
+  // the film is added once and every entry counts; otherwise nothing counts and (*acks)[i] says
+  // what entry i is: a duplicate (counted before: drop it), kResend (send it again without the
+  // others) or kRefused (its reason). Not-OK statuses are the batch's fault as a whole (two
+  // entries of one chain, an unsound film: every chain in it is charged a failure).
+  Status acceptBatch(const std::string& worker, FlushBatch&& batch, SteadyClock::time_point now,
+                     std::vector<FlushAck>* acks, const EncodedSplats* wire = nullptr);
   // Expires leases, enforces the time budget, finishes the job when every chain has ended.
   void tick(SteadyClock::time_point now);
   // Returns the phase after the cancellation (a job already over keeps its phase). Without
@@ -162,6 +172,10 @@ class Job {
   void recordEndLocked();
   void checkpointLocked();
   void countFailureLocked(const std::string& worker, uint32_t chain, const std::string& why);
+  // Whether the chain of a counted (or duplicate) flush goes on: `ack` gets stop and its reason
+  // when the job's time is up, the worker no longer holds the lease, or the chain yields.
+  void answerLocked(uint32_t chain, const std::string& worker, uint64_t epoch, bool accepted,
+                    bool finished, int64_t mutations, FlushAck* ack);
   void enforceBudgetLocked(SteadyClock::time_point now);
   void finishIfCompleteLocked(SteadyClock::time_point now);
   void recordErrorLocked(SteadyClock::time_point now, bool force);

@@ -221,57 +221,88 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   return true;
 }
 
+// A flush's place, counts and state (everything but its film).
+void encodeEntry(const ChainFlush& flush, store::v1::FlushRecord* r) {
+  r->set_chain_index(flush.chainIndex);
+  r->set_flush_index(flush.flushIndex);
+  r->set_mutations(flush.mutations);
+  r->set_rejected_nan(flush.rejected.nan);
+  r->set_rejected_infinite(flush.rejected.infinite);
+  r->set_rejected_negative(flush.rejected.negative);
+  r->set_rays(flush.rays);
+  r->set_state(flush.state);
+  for (const MutationTally& t : flush.tallies) toRecord(t, r->add_tallies());
+  r->set_finished(flush.finished);
+}
+
+ChainFlush decodeEntry(const store::v1::FlushRecord& r) {
+  ChainFlush flush;
+  flush.chainIndex = r.chain_index();
+  flush.flushIndex = r.flush_index();
+  flush.mutations = r.mutations();
+  flush.rejected.nan = r.rejected_nan();
+  flush.rejected.infinite = r.rejected_infinite();
+  flush.rejected.negative = r.rejected_negative();
+  flush.rays = r.rays();
+  flush.state = r.state();
+  for (const v1::MutationTally& t : r.tallies()) flush.tallies.push_back(fromRecord(t));
+  flush.finished = r.finished();
+  return flush;
+}
+
+// A record's film (`film`'s width, height and splats), as it travels (proto/splat_codec.h).
+void encodeFilm(const ChainFlush& film, const EncodedSplats* wire, store::v1::FlushRecord* r) {
+  r->set_width(film.width);
+  r->set_height(film.height);
+  EncodedSplats encoded;
+  if (!wire) encoded = encodeSplats(film.splats);
+  const EncodedSplats& splats = wire ? *wire : encoded;
+  r->set_splats(splats.bytes);
+  r->set_sparse(splats.sparse);
+  r->set_compressed(splats.compressed);
+  r->set_raw_splat_bytes(splats.rawBytes);
+}
+
 std::string encodeFlush(const ChainFlush& flush, const EncodedSplats* wire) {
   store::v1::FlushRecord r;
-  r.set_chain_index(flush.chainIndex);
-  r.set_flush_index(flush.flushIndex);
-  r.set_mutations(flush.mutations);
-  r.set_width(flush.width);
-  r.set_height(flush.height);
-  r.set_rejected_nan(flush.rejected.nan);
-  r.set_rejected_infinite(flush.rejected.infinite);
-  r.set_rejected_negative(flush.rejected.negative);
-  r.set_rays(flush.rays);
-  r.set_state(flush.state);
-  for (const MutationTally& t : flush.tallies) toRecord(t, r.add_tallies());
-  r.set_finished(flush.finished);
-  EncodedSplats encoded;
-  if (!wire) encoded = encodeSplats(flush.splats);
-  const EncodedSplats& splats = wire ? *wire : encoded;
-  r.set_splats(splats.bytes);
-  r.set_sparse(splats.sparse);
-  r.set_compressed(splats.compressed);
-  r.set_raw_splat_bytes(splats.rawBytes);
+  encodeEntry(flush, &r);
+  encodeFilm(flush, wire, &r);
   return r.SerializeAsString();
 }
 
-bool decodeFlush(const std::string& bytes, ChainFlush* flush, std::string* error) {
+// A batch: its film, and each entry as a record of its own without one.
+std::string encodeBatch(const FlushBatch& batch, const EncodedSplats* wire) {
+  store::v1::FlushRecord r;
+  encodeFilm(batch.film, wire, &r);
+  for (const ChainFlush& entry : batch.entries) encodeEntry(entry, r.add_entries());
+  return r.SerializeAsString();
+}
+
+// Either kind of record as a batch (a single flush: a batch of one).
+bool decodeRecord(const std::string& bytes, FlushBatch* batch, std::string* error) {
   store::v1::FlushRecord r;
   if (!r.ParseFromString(bytes) || r.width() <= 0 || r.height() <= 0) {
     *error = "unreadable flush record";
     return false;
   }
-  flush->chainIndex = r.chain_index();
-  flush->flushIndex = r.flush_index();
-  flush->mutations = r.mutations();
-  flush->width = r.width();
-  flush->height = r.height();
-  flush->rejected.nan = r.rejected_nan();
-  flush->rejected.infinite = r.rejected_infinite();
-  flush->rejected.negative = r.rejected_negative();
-  flush->rays = r.rays();
-  flush->state = r.state();
-  for (const v1::MutationTally& t : r.tallies()) flush->tallies.push_back(fromRecord(t));
-  flush->finished = r.finished();
+  if (r.entries().empty()) {
+    batch->entries.push_back(decodeEntry(r));
+  } else {
+    for (const store::v1::FlushRecord& e : r.entries()) batch->entries.push_back(decodeEntry(e));
+  }
+  batch->epochs.assign(batch->entries.size(), 0);
+  ChainFlush& film = batch->film;
+  film.width = r.width();
+  film.height = r.height();
   EncodedSplats splats;
   splats.bytes = r.splats();
   splats.sparse = r.sparse();
   splats.compressed = r.compressed();
   splats.rawBytes = r.raw_splat_bytes();
   std::string problem;
-  if (!decodeSplats(splats, size_t(r.width()) * size_t(r.height()) * 3, &flush->splats, &problem)) {
-    *error = "flush " + std::to_string(r.flush_index()) + " of chain " +
-             std::to_string(r.chain_index()) + ": " + problem;
+  if (!decodeSplats(splats, size_t(r.width()) * size_t(r.height()) * 3, &film.splats, &problem)) {
+    *error = "the record of flush " + std::to_string(batch->entries.front().flushIndex) +
+             " of chain " + std::to_string(batch->entries.front().chainIndex) + ": " + problem;
     return false;
   }
   return true;
@@ -563,9 +594,22 @@ Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double ela
 
 Status JobStore::appendFlush(const std::string& id, const ChainFlush& flush, double elapsedSeconds,
                              uint64_t* tailBytes, const EncodedSplats* wire) {
-  const std::string record = encodeFlush(flush, wire);  // outside the lock
-  const std::string what = "cannot record flush " + std::to_string(flush.flushIndex) +
-                           " of chain " + std::to_string(flush.chainIndex) + " of job " + id;
+  return appendRecord(id, encodeFlush(flush, wire),  // encoded outside the lock
+                      "cannot record flush " + std::to_string(flush.flushIndex) + " of chain " +
+                          std::to_string(flush.chainIndex) + " of job " + id,
+                      elapsedSeconds, tailBytes);
+}
+
+Status JobStore::appendBatch(const std::string& id, const FlushBatch& batch, double elapsedSeconds,
+                             uint64_t* tailBytes, const EncodedSplats* wire) {
+  return appendRecord(
+      id, encodeBatch(batch, wire),
+      "cannot record a batch of " + std::to_string(batch.entries.size()) + " flushes of job " + id,
+      elapsedSeconds, tailBytes);
+}
+
+Status JobStore::appendRecord(const std::string& id, const std::string& record,
+                              const std::string& what, double elapsedSeconds, uint64_t* tailBytes) {
   std::lock_guard<std::mutex> lock(mutex_);
   FlushLog* log = nullptr;
   if (Status st = openLogLocked(id, &log); !st.isOk()) return st;
@@ -693,9 +737,9 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
             !log.read(record.data(), std::streamsize(record.size()))) {
           return corrupt("the flush log " + logPath(job.id) + " ends before a recorded flush");
         }
-        ChainFlush flush;
-        if (!decodeFlush(record, &flush, &problem)) return corrupt(problem);
-        job.tail.push_back(std::move(flush));
+        FlushBatch batch;
+        if (!decodeRecord(record, &batch, &problem)) return corrupt(problem);
+        job.tail.push_back(std::move(batch));
       }
       if (trc != SQLITE_DONE) return fail("cannot read the flushes of job " + job.id);
     }

@@ -58,7 +58,7 @@ struct StoredJob {
   // From the newest checkpoint (absent: none yet), then the flushes accepted after it, in order.
   std::optional<SplatAggregator::Snapshot> checkpoint;
   std::vector<ChainScheduler::ChainSnapshot> checkpointChains;
-  std::vector<ChainFlush> tail;
+  std::vector<FlushBatch> tail;  // a single flush as a batch of one
   std::vector<ErrorSample> errorSeries;
 };
 
@@ -102,6 +102,9 @@ class JobStore {
   // instead of encoded again; null: encoded from flush.splats.
   Status appendFlush(const std::string& id, const ChainFlush& flush, double elapsedSeconds,
                      uint64_t* tailBytes, const EncodedSplats* wire = nullptr);
+  // The same for a batch (one record: its film once, then its entries); `wire` is its film's.
+  Status appendBatch(const std::string& id, const FlushBatch& batch, double elapsedSeconds,
+                     uint64_t* tailBytes, const EncodedSplats* wire = nullptr);
   // Replaces the job's log so far by this state of its sums and chains.
   Status checkpoint(const std::string& id, const SplatAggregator::Snapshot& sums,
                     const std::vector<ChainScheduler::ChainSnapshot>& chains);
@@ -118,6 +121,8 @@ class JobStore {
   };
   JobStore(sqlite3* db, std::string path, std::string logDir);
   std::string logPath(const std::string& id) const;
+  Status appendRecord(const std::string& id, const std::string& record, const std::string& what,
+                      double elapsedSeconds, uint64_t* tailBytes);
   Status openLogLocked(const std::string& id, FlushLog** log);
   void resetLogLocked(const std::string& id);
   Status exec(const char* sql);

@@ -45,6 +45,34 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
   const FlushOutcome outcome = check(flush, problem);
   if (outcome != FlushOutcome::kAccepted) return outcome;
   for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(flush.splats[i]);
+  countFlush(flush);
+  return FlushOutcome::kAccepted;
+}
+
+FlushOutcome SplatAggregator::addBatch(const FlushBatch& batch, std::string* problem) {
+  std::vector<bool> seen(nextFlush_.size(), false);
+  for (const ChainFlush& entry : batch.entries) {
+    const FlushOutcome outcome = checkEntry(entry, problem);
+    if (outcome != FlushOutcome::kAccepted) return outcome;
+    if (seen[entry.chainIndex]) {
+      if (problem)
+        *problem = "the batch holds two flushes of chain " + std::to_string(entry.chainIndex);
+      return FlushOutcome::kOutOfOrder;
+    }
+    seen[entry.chainIndex] = true;
+  }
+  if (batch.entries.empty()) {
+    if (problem) *problem = "the batch holds no flush";
+    return FlushOutcome::kBadValues;
+  }
+  const FlushOutcome film = checkFilm(batch.film, "the batch's film", problem);
+  if (film != FlushOutcome::kAccepted) return film;
+  for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(batch.film.splats[i]);
+  for (const ChainFlush& entry : batch.entries) countFlush(entry);
+  return FlushOutcome::kAccepted;
+}
+
+void SplatAggregator::countFlush(const ChainFlush& flush) {
   workDone_ += flush.mutations;
   rejected_ += flush.rejected;
   rays_ += flush.rays;
@@ -60,10 +88,18 @@ FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem)
   }
   ++acceptedFlushes_;
   ++nextFlush_[flush.chainIndex];
-  return FlushOutcome::kAccepted;
 }
 
 FlushOutcome SplatAggregator::check(const ChainFlush& flush, std::string* problem) const {
+  const FlushOutcome outcome = checkEntry(flush, problem);
+  if (outcome != FlushOutcome::kAccepted) return outcome;
+  return checkFilm(
+      flush,
+      "flush " + std::to_string(flush.flushIndex) + " of chain " + std::to_string(flush.chainIndex),
+      problem);
+}
+
+FlushOutcome SplatAggregator::checkEntry(const ChainFlush& flush, std::string* problem) const {
   std::string ignored;
   std::string& why = problem ? *problem : ignored;
   const std::string name =
@@ -82,13 +118,6 @@ FlushOutcome SplatAggregator::check(const ChainFlush& flush, std::string* proble
     why = name + " arrived before flush " + std::to_string(next);
     return FlushOutcome::kOutOfOrder;
   }
-  if (flush.width != width_ || flush.height != height_ || flush.splats.size() != sums_.size()) {
-    why = name + " is " + std::to_string(flush.width) + "x" + std::to_string(flush.height) +
-          " with " + std::to_string(flush.splats.size()) + " values; the film is " +
-          std::to_string(width_) + "x" + std::to_string(height_) + " (" +
-          std::to_string(sums_.size()) + " values)";
-    return FlushOutcome::kWrongSize;
-  }
   if (flush.mutations < 0 || flush.rejected.nan < 0 || flush.rejected.infinite < 0 ||
       flush.rejected.negative < 0 || flush.rays < 0) {
     why = name + " reports a negative count";
@@ -106,6 +135,20 @@ FlushOutcome SplatAggregator::check(const ChainFlush& flush, std::string* proble
             " characters, 0 <= accepted <= proposed)";
       return FlushOutcome::kBadValues;
     }
+  }
+  return FlushOutcome::kAccepted;
+}
+
+FlushOutcome SplatAggregator::checkFilm(const ChainFlush& flush, const std::string& name,
+                                        std::string* problem) const {
+  std::string ignored;
+  std::string& why = problem ? *problem : ignored;
+  if (flush.width != width_ || flush.height != height_ || flush.splats.size() != sums_.size()) {
+    why = name + " is " + std::to_string(flush.width) + "x" + std::to_string(flush.height) +
+          " with " + std::to_string(flush.splats.size()) + " values; the film is " +
+          std::to_string(width_) + "x" + std::to_string(height_) + " (" +
+          std::to_string(sums_.size()) + " values)";
+    return FlushOutcome::kWrongSize;
   }
   size_t nonFinite = 0;
   for (float v : flush.splats) nonFinite += !std::isfinite(v);

@@ -19,6 +19,16 @@ enum class FlushOutcome {
   kBadValues,     // negative mutations, or a splat that is NaN or infinite
 };
 
+// A worker's upload of several chains' flushes of one job in one (issue 8, part 4): `film`
+// carries the entries' splats summed (and the film's size; its other fields are unused), each
+// entry one chain's counts, state and flush index (its splats empty), under the lease epoch
+// beside it. The aggregator takes a batch whole or not at all: the film cannot be split.
+struct FlushBatch {
+  ChainFlush film;
+  std::vector<ChainFlush> entries;
+  std::vector<uint64_t> epochs;  // one per entry
+};
+
 constexpr size_t kMaxTallyKinds = 16;
 constexpr size_t kMaxTallyName = 32;
 
@@ -43,8 +53,16 @@ class SplatAggregator {
   // What add() would answer, changing nothing: a durable coordinator records a flush between
   // check() and add(), so that a flush it could not record is not summed either.
   FlushOutcome check(const ChainFlush& flush, std::string* problem = nullptr) const;
+  // The parts of check(): a flush's place and counts (what a batch entry carries), and its film.
+  FlushOutcome checkEntry(const ChainFlush& flush, std::string* problem = nullptr) const;
+  FlushOutcome checkFilm(const ChainFlush& flush, const std::string& name,
+                         std::string* problem = nullptr) const;
   // Adds the flush's splats if it is the next one of its chain; *problem says why not.
   FlushOutcome add(const ChainFlush& flush, std::string* problem = nullptr);
+  // Adds the batch's film once and every entry's counts, if every entry is the next flush of
+  // its chain (one entry a chain) and the film is sound; otherwise changes nothing and answers
+  // the first entry's (or the film's) outcome that is not kAccepted.
+  FlushOutcome addBatch(const FlushBatch& batch, std::string* problem = nullptr);
   // withSums false: the counts alone (what an ended job keeps), without copying the film.
   Snapshot snapshot(bool withSums = true) const;
 
@@ -62,6 +80,8 @@ class SplatAggregator {
   int height() const { return height_; }
 
  private:
+  void countFlush(const ChainFlush& flush);  // a checked flush's counts; its chain moves on
+
   int width_, height_;
   std::vector<double> sums_;
   std::vector<uint32_t> nextFlush_;

@@ -80,6 +80,7 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   toProto(settings.mutationMix, m.mutable_mutation_mix());
   m.set_erpt_chains(settings.erptChains);
   m.set_erpt_length(settings.erptLength);
+  m.set_flush_interval(settings.flushInterval);
   m.set_medium_samples(settings.mediumSamples);
   m.set_medium_march_steps(settings.mediumMarchSteps);
   return m;
@@ -101,6 +102,7 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   if (!fromProto(m.mutation_mix(), &s.mutationMix, error)) return false;
   if (m.erpt_chains() != 0) s.erptChains = m.erpt_chains();
   if (m.erpt_length() != 0) s.erptLength = m.erpt_length();
+  s.flushInterval = m.flush_interval();
   if (m.medium_samples() != 0) s.mediumSamples = m.medium_samples();
   s.mediumMarchSteps = m.medium_march_steps();
   *out = s;
@@ -194,6 +196,42 @@ const char* phaseName(v1::JobPhase phase) {
     default:
       return "unknown";
   }
+}
+
+void toProto(const ChainFlush& f, uint64_t epoch, v1::BatchEntry* e) {
+  e->set_chain_index(f.chainIndex);
+  e->set_flush_index(f.flushIndex);
+  e->set_epoch(epoch);
+  e->set_mutations(f.mutations);
+  e->set_rejected_nan(f.rejected.nan);
+  e->set_rejected_infinite(f.rejected.infinite);
+  e->set_rejected_negative(f.rejected.negative);
+  e->set_rays(f.rays);
+  e->set_state(f.state);
+  e->set_finished(f.finished);
+  for (const MutationTally& t : f.tallies) {
+    v1::MutationTally* tally = e->add_tallies();
+    tally->set_name(t.name);
+    tally->set_proposed(t.proposed);
+    tally->set_accepted(t.accepted);
+  }
+}
+
+ChainFlush fromProto(const v1::BatchEntry& e) {
+  ChainFlush f;
+  f.chainIndex = e.chain_index();
+  f.flushIndex = e.flush_index();
+  f.mutations = e.mutations();
+  f.rejected.nan = e.rejected_nan();
+  f.rejected.infinite = e.rejected_infinite();
+  f.rejected.negative = e.rejected_negative();
+  f.rays = e.rays();
+  f.state = e.state();
+  f.finished = e.finished();
+  for (const v1::MutationTally& t : e.tallies()) {
+    f.tallies.push_back({t.name(), t.proposed(), t.accepted()});
+  }
+  return f;
 }
 
 }  // namespace farm

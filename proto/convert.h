@@ -19,6 +19,9 @@ bool fromProto(const v1::RenderSettings& message, RenderSettings* out, std::stri
 
 v1::ChainSpec toProto(const ChainSpec& spec);
 bool fromProto(const v1::ChainSpec& message, ChainSpec* out, std::string* error);
+// A flush as an entry of a batch (everything but its film) and back.
+void toProto(const ChainFlush& flush, uint64_t epoch, v1::BatchEntry* entry);
+ChainFlush fromProto(const v1::BatchEntry& entry);
 
 // Lowercase names of job phases, as `farm status` and `farm list` print them.
 const char* phaseName(v1::JobPhase phase);

@@ -6,7 +6,8 @@
 namespace farm {
 
 // Bumped whenever farm.proto changes incompatibly; RegisterWorker rejects a mismatch.
-inline constexpr uint32_t kProtocolVersion = 2;  // 2: sparse and compressed flushes
+// 2: sparse and compressed flushes; 3: batches (FlushHeader.entries)
+inline constexpr uint32_t kProtocolVersion = 3;
 
 // gRPC message size limit, set explicitly on servers and channels (the library default of 4 MiB
 // is implicit and asymmetric between send and receive).
@@ -15,6 +16,8 @@ inline constexpr int kMaxMessageBytes = 16 * 1024 * 1024;
 // Bulk data travels in chunks no larger than this: well under kMaxMessageBytes with room for
 // the envelope, and small enough that a stalled stream is noticed quickly.
 inline constexpr size_t kMaxChunkBytes = 1024 * 1024;
+// Flushes in one batch (FlushHeader.entries): a worker sums at most one flush a chain it runs.
+inline constexpr size_t kMaxBatchEntries = 4096;
 
 // `farm submit` leaves larger files out of a scene bundle (they are almost never scene data).
 inline constexpr uint64_t kMaxBundleFileBytes = 256ull * 1024 * 1024;

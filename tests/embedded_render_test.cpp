@@ -113,6 +113,31 @@ TEST(EmbeddedRender, ReportShowsTheBootstrapsSizeAndZsShareOfTheError) {
   EXPECT_NE(report.find(expected), std::string::npos) << expected << "\n" << report;
 }
 
+// --flush-every sets the work between a chain's flushes; the image does not depend on it.
+TEST(EmbeddedRender, FlushIntervalChangesTheFlushesNotTheImage) {
+  for (Algorithm a : {Algorithm::PathTracing, Algorithm::PSSMLT, Algorithm::MLT}) {
+    EmbeddedRenderOptions o = options(a, 2, 1);
+    o.settings.numChains = 2;  // 2304 each: the default flushes once, 300 eight times
+    EmbeddedRenderResult standard, frequent;
+    ASSERT_TRUE(renderEmbedded(o, &standard).isOk());
+    o.settings.flushInterval = 300;
+    ASSERT_TRUE(renderEmbedded(o, &frequent).isOk());
+    EXPECT_EQ(frequent.progress.workDone, standard.progress.workDone);
+    double worst = 0;
+    for (size_t i = 0; i < standard.image.rgb.size(); ++i) {
+      const double a0 = standard.image.rgb[i], b0 = frequent.image.rgb[i];
+      if (std::abs(a0) > 1e-3) worst = std::max(worst, std::abs(a0 - b0) / std::abs(a0));
+    }
+    EXPECT_LT(worst, 1e-5) << algorithmName(a);
+
+    RenderJob job(loadScene(kScene, o.settings), o.settings, "flushes");
+    for (const ChainSpec& spec : job.planChains(job.bootstrap())) {
+      ASSERT_EQ(spec.budget, 2304);
+      EXPECT_EQ(spec.flushInterval, 300) << algorithmName(a);
+    }
+  }
+}
+
 TEST(EmbeddedRender, MissingLightIsAClearError) {
   EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 1, 1);
   o.scenePath = "/nonexistent/scene.xml";

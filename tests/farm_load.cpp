@@ -55,6 +55,7 @@ struct Options {
   int connections = 8;
   int samples = 2;
   int duplicateEvery = 0;  // > 0: every Nth upload re-sends a chain's last accepted flush
+  bool batch = false;      // each upload: a simulated worker's chains summed (FlushHeader.entries)
   std::string json;
   bool check = false;
 };
@@ -77,6 +78,7 @@ struct SampleFlush {
 struct Tally {
   int64_t accepted = 0, refused = 0, mutations = 0;
   int64_t duplicates = 0;  // re-sent flushes answered DUPLICATE, as they must be
+  int64_t uploads = 0;     // calls made (a batch: one for all its flushes)
   uint64_t wireBytes = 0, rawBytes = 0;
   std::vector<double> latencies;
   std::string firstError;
@@ -154,6 +156,46 @@ grpc::Status uploadOnce(v1::WorkerApi::Stub* stub, const std::string& jobId, con
     v1::UploadFlushRequest chunk;
     chunk.set_splats(s.splats.bytes.data() + at,
                      std::min(kMaxChunkBytes, s.splats.bytes.size() - at));
+    open = writer->Write(chunk);
+  }
+  writer->WritesDone();
+  return writer->Finish();
+}
+
+// One upload of a simulated worker's chains as a batch: `film` is their films summed; each
+// chain's entry carries the sample flush it replays. `back`: re-send the previous batch.
+grpc::Status uploadBatch(v1::WorkerApi::Stub* stub, const std::string& jobId,
+                         const std::vector<SimChain*>& chains, bool back,
+                         const std::vector<SampleFlush>& samples, const SampleFlush& film,
+                         v1::UploadFlushResponse* response) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  auto writer = stub->UploadFlush(&context, response);
+  v1::UploadFlushRequest message;
+  v1::FlushHeader* h = message.mutable_header();
+  h->set_worker_id(chains.front()->worker);
+  h->set_job_id(jobId);
+  h->set_width(film.flush.width);
+  h->set_height(film.flush.height);
+  Sha256 digest;
+  digest.update(film.splats.bytes);
+  for (const SimChain* c : chains) {
+    const ChainFlush& f = samples[c->chain % samples.size()].flush;
+    toProto(f, c->epoch, h->add_entries());
+    h->mutable_entries(h->entries_size() - 1)->set_flush_index(c->nextFlush - (back ? 1 : 0));
+    h->mutable_entries(h->entries_size() - 1)->set_chain_index(c->chain);
+    digest.update(f.state);
+  }
+  h->set_splat_bytes(film.splats.bytes.size());
+  h->set_sparse(film.splats.sparse);
+  h->set_compressed(film.splats.compressed);
+  h->set_raw_splat_bytes(film.splats.rawBytes);
+  h->set_checksum(digest.hexDigest());
+  bool open = writer->Write(message);
+  for (size_t at = 0; open && at < film.splats.bytes.size(); at += kMaxChunkBytes) {
+    v1::UploadFlushRequest chunk;
+    chunk.set_splats(film.splats.bytes.data() + at,
+                     std::min(kMaxChunkBytes, film.splats.bytes.size() - at));
     open = writer->Write(chunk);
   }
   writer->WritesDone();
@@ -302,8 +344,29 @@ int run(const Options& o) {
               << std::chrono::duration<double>(Clock::now() - t0).count() << " s\n";
   }
 
-  // The load: each connection uploads for its share of the chains, round robin.
-  const int connections = std::max(1, std::min<int>(o.connections, int(chains.size())));
+  // A batch's film: the sample flushes summed, as a worker sums its chains' (the density of
+  // the sum is what its size depends on).
+  SampleFlush batchFilm;
+  if (o.batch) {
+    batchFilm.flush.width = samples[0].flush.width;
+    batchFilm.flush.height = samples[0].flush.height;
+    std::vector<double> sum(samples[0].flush.splats.size(), 0.0);
+    for (int k = 0; k < o.chainsPerWorker; ++k) {
+      const ChainFlush& f = samples[size_t(k) % samples.size()].flush;
+      for (size_t i = 0; i < sum.size(); ++i) sum[i] += f.splats[i];
+    }
+    batchFilm.flush.splats.assign(sum.begin(), sum.end());
+    batchFilm.splats = encodeSplats(batchFilm.flush.splats);
+  }
+  // What one upload carries: a chain, or (--batch) all of a simulated worker's.
+  std::vector<std::vector<SimChain*>> units;
+  for (SimChain& c : chains) {
+    if (!o.batch || units.empty() || units.back().front()->worker != c.worker) units.emplace_back();
+    units.back().push_back(&c);
+  }
+
+  // The load: each connection uploads for its share of the units, round robin.
+  const int connections = std::max(1, std::min<int>(o.connections, int(units.size())));
   std::vector<Tally> tallies(static_cast<size_t>(connections));
   std::atomic<int64_t> sent{0};
   const double cpu0 = processCpuSeconds(coordinator.pid());
@@ -315,13 +378,43 @@ int run(const Options& o) {
     threads.emplace_back([&, k] {
       auto stub = v1::WorkerApi::NewStub(channel(address));
       Tally& t = tallies[size_t(k)];
-      std::vector<SimChain*> mine;
-      for (size_t i = size_t(k); i < chains.size(); i += size_t(connections)) {
-        mine.push_back(&chains[i]);
+      std::vector<std::vector<SimChain*>*> mine;
+      for (size_t i = size_t(k); i < units.size(); i += size_t(connections)) {
+        mine.push_back(&units[i]);
       }
       for (size_t n = 0; Clock::now() < end; ++n) {
         if (o.maxFlushes > 0 && sent.fetch_add(1) >= o.maxFlushes) break;
-        SimChain& c = *mine[n % mine.size()];
+        if (o.batch) {
+          std::vector<SimChain*>& unit = *mine[n % mine.size()];
+          const bool resend = o.duplicateEvery > 0 && unit.front()->nextFlush > 0 &&
+                              (n + 1) % size_t(o.duplicateEvery) == 0;
+          v1::UploadFlushResponse response;
+          const Clock::time_point t0 = Clock::now();
+          grpc::Status status =
+              uploadBatch(stub.get(), jobId, unit, resend, samples, batchFilm, &response);
+          t.latencies.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+          ++t.uploads;
+          if (resend && status.ok() && response.result() == v1::UploadFlushResponse::DUPLICATE) {
+            t.duplicates += int64_t(unit.size());
+          } else if (!resend && status.ok() &&
+                     response.result() == v1::UploadFlushResponse::ACCEPTED) {
+            t.wireBytes += batchFilm.splats.bytes.size();
+            t.rawBytes += batchFilm.flush.splats.size() * sizeof(float);
+            for (SimChain* c : unit) {
+              ++t.accepted;
+              t.mutations += samples[c->chain % samples.size()].flush.mutations;
+              ++c->nextFlush;
+            }
+          } else {
+            ++t.refused;
+            if (t.firstError.empty()) {
+              t.firstError = status.ok() ? "batch result " + std::to_string(int(response.result()))
+                                         : status.error_message();
+            }
+          }
+          continue;
+        }
+        SimChain& c = *mine[n % mine.size()]->front();
         const SampleFlush& s = samples[c.chain % samples.size()];
         v1::UploadFlushResponse response;
         // A retry of the chain's last accepted flush, as a worker that lost the answer sends.
@@ -332,6 +425,7 @@ int run(const Options& o) {
         const Clock::time_point t0 = Clock::now();
         grpc::Status status = uploadOnce(stub.get(), jobId, target, s, &response);
         t.latencies.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        ++t.uploads;
         if (resend && status.ok() && response.result() == v1::UploadFlushResponse::DUPLICATE) {
           ++t.duplicates;
         } else if (!resend && status.ok() &&
@@ -361,6 +455,7 @@ int run(const Options& o) {
     total.accepted += t.accepted;
     total.refused += t.refused;
     total.duplicates += t.duplicates;
+    total.uploads += t.uploads;
     total.mutations += t.mutations;
     total.wireBytes += t.wireBytes;
     total.rawBytes += t.rawBytes;
@@ -386,9 +481,16 @@ int run(const Options& o) {
   r["flushes_accepted"] = total.accepted;
   r["flushes_refused"] = total.refused;
   r["duplicates_recognized"] = total.duplicates;
+  r["batch"] = o.batch;
+  r["uploads"] = total.uploads;
+  r["uploads_per_second"] = double(total.uploads) / wall;
   r["flushes_per_second"] = double(total.accepted) / wall;
+  // Per accepted upload (a batch's film once for all its flushes).
+  const double acceptedUploads =
+      o.batch ? double(total.accepted) / o.chainsPerWorker : double(total.accepted);
+  r["wire_bytes_per_upload"] = acceptedUploads > 0 ? double(total.wireBytes) / acceptedUploads : 0;
+  r["dense_bytes_per_upload"] = acceptedUploads > 0 ? double(total.rawBytes) / acceptedUploads : 0;
   r["wire_bytes_per_flush"] = total.accepted ? double(total.wireBytes) / double(total.accepted) : 0;
-  r["dense_bytes_per_flush"] = total.accepted ? double(total.rawBytes) / double(total.accepted) : 0;
   r["wire_mb_per_second"] = double(total.wireBytes) / wall / 1e6;
   r["coordinator_cpu_seconds"] = cpu;
   r["coordinator_cores_busy"] = cpu / wall;
@@ -455,6 +557,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--durable", o.durable, "start the coordinator with --data (SQLite, synchronous)");
+  app.add_flag("--batch", o.batch,
+               "each upload carries all of a simulated worker's chains, their flushes summed "
+               "into one film (as farm-worker --batch-window sends them)");
   app.add_option("--json", o.json, "also write the figures to this file");
   app.add_flag("--check", o.check,
                "exit 1 unless every upload was accepted and the job counted each exactly once");

@@ -332,7 +332,8 @@ TEST_F(HostileRpcTest, AbsurdResolutionIsRejected) {
 
 // The algorithms' own parameters get the same scrutiny as the film: a mutation mix without the
 // bidirectional mutation (the chain would not be ergodic), weights that are not numbers, ERPT
-// chains and lengths out of range, an algorithm this coordinator does not know.
+// chains and lengths out of range, flush intervals and bootstrap sizes out of range, an
+// algorithm this coordinator does not know.
 TEST_F(HostileRpcTest, BadAlgorithmParametersAreRejected) {
   v1::RenderSettings settings = smallSettings();
   settings.set_algorithm(v1::MLT);
@@ -348,6 +349,13 @@ TEST_F(HostileRpcTest, BadAlgorithmParametersAreRejected) {
   settings.set_erpt_chains(1);
   settings.set_erpt_length(1 << 30);
   EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "ERPT chain length");
+  settings = smallSettings();
+  settings.set_flush_interval(-5);
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "--flush-every");
+  settings = smallSettings();
+  settings.set_bootstrap_samples(int64_t(1) << 40);
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT,
+                "--bootstrap-candidates");
   settings = smallSettings();
   settings.set_algorithm(v1::Algorithm(99));
   EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "algorithm");

@@ -58,6 +58,8 @@ class ChainSource {
   // chain then stops, its lease expires, and the chain resumes elsewhere from the last flush
   // that was delivered.
   virtual FlushReceipt upload(const LeasedChain& chain, ChainFlush&& flush) = 0;
+  // The chain's thread is done with it (it finished, stopped or failed).
+  virtual void release(const LeasedChain& chain) { (void)chain; }
   // Keeps the leases of running chains alive; returns, per chain, whether its lease was lost.
   // Throws SourceUnavailable.
   virtual std::vector<bool> renew(const std::vector<const LeasedChain*>& chains) = 0;

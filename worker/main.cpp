@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
   const int hardwareThreads = int(std::max(1u, std::thread::hardware_concurrency()));
   CLI::App app{
       "farm-worker: leases chains from a farm-coordinator, runs each on a thread of its own, "
-      "and uploads every flush. Scene bundles are fetched once per content hash and cached. "
+      "and uploads every flush (those of one job summed into one upload, see --batch-window). "
+      "Scene bundles are fetched once per content hash and cached. "
       "Retries with backoff while the coordinator is unreachable; SIGINT or SIGTERM stops the "
       "chains at their next flush and exits."};
   std::string coordinator;
@@ -45,6 +46,13 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096))
       ->default_str(std::to_string(hardwareThreads));
   app.add_option("--cache", cacheDir, "directory for cached scene bundles")->default_str(cacheDir);
+  double batchWindow = 1;
+  app.add_option("--batch-window", batchWindow,
+                 "sum the flushes of this worker's chains of one job into one upload, sent once "
+                 "every such chain has flushed or this many seconds after the first did; 0 "
+                 "uploads each flush on its own")
+      ->check(CLI::Range(0.0, 600.0))
+      ->default_str("1");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -70,6 +78,7 @@ int main(int argc, char** argv) {
   options.threads = threads;
   options.cacheDir = cacheDir;
   options.log = log;
+  options.batchWindowSeconds = batchWindow;
   farm::RemoteChainSource source(options);
   farm::WorkerPoolOptions poolOptions;
   poolOptions.threads = threads;
@@ -105,8 +114,11 @@ int main(int argc, char** argv) {
                 "; streaming flushes took %.2f s of %.2f s of chain time (%.1f%%)",
                 stats.uploadSeconds, stats.chainSeconds,
                 stats.chainSeconds > 0 ? 100.0 * stats.uploadSeconds / stats.chainSeconds : 0.0);
+  const farm::FlushBatcher::Stats batches = source.batchStats();
+  const std::string uploads =
+      batches.batches > 0 ? " in " + std::to_string(batches.batches) + " uploads" : "";
   log("done: " + std::to_string(stats.chainsStarted) + " chains run, " +
-      std::to_string(stats.flushesAccepted) + " flushes accepted" + streaming);
+      std::to_string(stats.flushesAccepted) + " flushes accepted" + uploads + streaming);
   if (!refused.empty()) {
     std::cerr << "farm-worker: " << refused << "\n";
     return 1;

@@ -17,6 +17,7 @@
 #include "proto/sha256.h"
 #include "proto/splat_codec.h"
 #include "proto/wire_limits.h"
+#include "worker/flush_batcher.h"
 #include "worker/scene_cache.h"
 
 #if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
@@ -58,6 +59,7 @@ struct RemoteChainSource::Impl {
   std::shared_ptr<grpc::Channel> channel;
   std::unique_ptr<v1::WorkerApi::Stub> stub;
   std::unique_ptr<SceneCache> scenes;
+  std::unique_ptr<FlushBatcher> batcher;  // with a batch window
 
   std::mutex mutex;  // guards the registration
   std::string workerId;
@@ -183,10 +185,19 @@ struct RemoteChainSource::Impl {
         " files)");
   }
 
-  // One attempt at uploading a flush.
+  FlushReceipt uploadSingle(const LeasedChain& chain, const ChainFlush& flush);
+  std::vector<BatchAnswer> sendBatch(const std::vector<BatchItem*>& items);
+  // Uploads until it is answered, retrying what can be retried; throws when it cannot.
+  void deliver(const LeasedChain& chain, const ChainFlush& flush,
+               const std::vector<BatchItem*>& items, const EncodedSplats& splats,
+               const std::string& checksum, const std::string& what,
+               v1::UploadFlushResponse* response);
+
+  // One attempt at uploading a flush (`items` empty) or a batch of them (`flush` then holds the
+  // summed film only).
   grpc::Status uploadOnce(const std::string& id, const LeasedChain& chain, const ChainFlush& flush,
-                          const EncodedSplats& splats, const std::string& checksum,
-                          v1::UploadFlushResponse* response) {
+                          const std::vector<BatchItem*>& items, const EncodedSplats& splats,
+                          const std::string& checksum, v1::UploadFlushResponse* response) {
     grpc::ClientContext context;
     setDeadline(&context, std::chrono::duration_cast<std::chrono::seconds>(kUploadDeadline));
     auto writer = stub->UploadFlush(&context, response);
@@ -194,6 +205,8 @@ struct RemoteChainSource::Impl {
     v1::FlushHeader* header = message.mutable_header();
     header->set_worker_id(id);
     header->set_job_id(chain.jobId);
+    for (const BatchItem* item : items)
+      toProto(item->flush, item->chain->epoch, header->add_entries());
     header->set_chain_index(flush.chainIndex);
     header->set_flush_index(flush.flushIndex);
     header->set_epoch(chain.epoch);
@@ -240,6 +253,11 @@ RemoteChainSource::RemoteChainSource(RemoteSourceOptions options) : impl_(new Im
                                              grpc::InsecureChannelCredentials(), args);
   impl_->stub = v1::WorkerApi::NewStub(impl_->channel);
   Impl* impl = impl_.get();
+  if (impl_->options.batchWindowSeconds > 0) {
+    impl_->batcher = std::make_unique<FlushBatcher>(
+        impl_->options.batchWindowSeconds,
+        [impl](const std::vector<BatchItem*>& items) { return impl->sendBatch(items); });
+  }
   impl_->scenes = std::make_unique<SceneCache>(
       impl_->options.cacheDir,
       [impl](const std::string& hash, const std::string& dir) { impl->fetchBundle(hash, dir); });
@@ -294,6 +312,7 @@ std::vector<LeasedChain> RemoteChainSource::lease(int max, double waitSeconds) {
       chain.epoch = lease.epoch();
       chain.bundleHash = lease.bundle_hash();
       chain.scenePath = lease.scene_path();
+      if (impl_->batcher) impl_->batcher->chainStarted(chain.jobId);
       chains.push_back(std::move(chain));
     }
     return chains;
@@ -311,41 +330,123 @@ std::shared_ptr<const RenderJob> RemoteChainSource::renderJob(const LeasedChain&
 }
 
 FlushReceipt RemoteChainSource::upload(const LeasedChain& chain, ChainFlush&& flush) {
+  if (impl_->batcher) return impl_->batcher->upload(chain, std::move(flush));
+  return impl_->uploadSingle(chain, flush);
+}
+
+FlushBatcher::Stats RemoteChainSource::batchStats() const {
+  return impl_->batcher ? impl_->batcher->stats() : FlushBatcher::Stats();
+}
+
+void RemoteChainSource::release(const LeasedChain& chain) {
+  if (impl_->batcher) impl_->batcher->chainEnded(chain.jobId);
+}
+
+namespace {
+
+FlushReceipt receiptFrom(v1::UploadFlushResponse::Result result, bool stop,
+                         const std::string& reason, bool yielded) {
+  FlushReceipt receipt;
+  receipt.accepted = result == v1::UploadFlushResponse::ACCEPTED;
+  receipt.duplicate = result == v1::UploadFlushResponse::DUPLICATE;
+  receipt.stop = stop || result == v1::UploadFlushResponse::DISCARDED;
+  receipt.reason = reason;
+  receipt.yielded = yielded;
+  return receipt;
+}
+
+}  // namespace
+
+FlushReceipt RemoteChainSource::Impl::uploadSingle(const LeasedChain& chain,
+                                                   const ChainFlush& flush) {
   // Encoded once, sent as often as it takes.
   const EncodedSplats splats = encodeSplats(flush.splats);
   Sha256 digest;
   digest.update(splats.bytes);
   digest.update(flush.state);
   const std::string checksum = digest.hexDigest();
+  v1::UploadFlushResponse response;
+  deliver(chain, flush, {}, splats, checksum,
+          "flush " + std::to_string(flush.flushIndex) + " of chain " +
+              std::to_string(flush.chainIndex) + " of " + chain.jobId,
+          &response);
+  return receiptFrom(response.result(), response.stop(), response.reason(), response.yielded());
+}
 
-  const auto giveUp = std::chrono::steady_clock::now() +
-                      std::chrono::duration<double>(impl_->options.uploadRetrySeconds);
+std::vector<BatchAnswer> RemoteChainSource::Impl::sendBatch(const std::vector<BatchItem*>& items) {
+  if (items.size() == 1) {
+    BatchAnswer answer;
+    answer.kind = BatchAnswer::Kind::kReceipt;
+    answer.receipt = uploadSingle(*items[0]->chain, items[0]->flush);
+    return {answer};
+  }
+  // The films summed in double, sent in float as a single flush's is.
+  const ChainFlush& first = items.front()->flush;
+  std::vector<double> sum(first.splats.size(), 0.0);
+  for (const BatchItem* item : items) {
+    if (item->flush.splats.size() != sum.size()) {
+      throw std::runtime_error("the flushes of one job differ in film size");
+    }
+    for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(item->flush.splats[i]);
+  }
+  ChainFlush film;
+  film.width = first.width;
+  film.height = first.height;
+  film.splats.assign(sum.begin(), sum.end());
+  const EncodedSplats splats = encodeSplats(film.splats);
+  Sha256 digest;
+  digest.update(splats.bytes);
+  for (const BatchItem* item : items) digest.update(item->flush.state);
+  const std::string checksum = digest.hexDigest();
+  v1::UploadFlushResponse response;
+  deliver(
+      *items.front()->chain, film, items, splats, checksum,
+      "a batch of " + std::to_string(items.size()) + " flushes of " + items.front()->chain->jobId,
+      &response);
+  if (response.entries_size() != int(items.size())) {
+    throw std::runtime_error("the coordinator answered " + std::to_string(response.entries_size()) +
+                             " of a batch of " + std::to_string(items.size()) + " flushes");
+  }
+  std::vector<BatchAnswer> answers(items.size());
+  for (size_t i = 0; i < items.size(); ++i) {
+    const v1::UploadFlushResponse::EntryResult& r = response.entries(int(i));
+    BatchAnswer& a = answers[i];
+    if (r.result() == v1::UploadFlushResponse::RESEND) {
+      a.kind = BatchAnswer::Kind::kResend;
+    } else if (r.result() == v1::UploadFlushResponse::REFUSED) {
+      a.kind = BatchAnswer::Kind::kError;
+      a.error = "flush " + std::to_string(items[i]->flush.flushIndex) + " of chain " +
+                std::to_string(items[i]->flush.chainIndex) + " refused: " + r.reason();
+    } else {
+      a.kind = BatchAnswer::Kind::kReceipt;
+      a.receipt = receiptFrom(r.result(), r.stop(), r.reason(), r.yielded());
+    }
+  }
+  return answers;
+}
+
+void RemoteChainSource::Impl::deliver(const LeasedChain& chain, const ChainFlush& flush,
+                                      const std::vector<BatchItem*>& items,
+                                      const EncodedSplats& splats, const std::string& checksum,
+                                      const std::string& what, v1::UploadFlushResponse* response) {
+  const auto giveUp =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(options.uploadRetrySeconds);
   double backoff = 0.1;
   bool reregistered = false;
   for (;;) {
-    const std::string id = impl_->ensureRegistered();
-    v1::UploadFlushResponse response;
-    grpc::Status status = impl_->uploadOnce(id, chain, flush, splats, checksum, &response);
-    if (status.ok()) {
-      FlushReceipt receipt;
-      receipt.accepted = response.result() == v1::UploadFlushResponse::ACCEPTED;
-      receipt.duplicate = response.result() == v1::UploadFlushResponse::DUPLICATE;
-      receipt.stop = response.stop() || response.result() == v1::UploadFlushResponse::DISCARDED;
-      receipt.reason = response.reason();
-      receipt.yielded = response.yielded();
-      return receipt;
-    }
-    if (Impl::forgotWorker(status) && !reregistered) {
+    const std::string id = ensureRegistered();
+    response->Clear();
+    grpc::Status status = uploadOnce(id, chain, flush, items, splats, checksum, response);
+    if (status.ok()) return;
+    if (forgotWorker(status) && !reregistered) {
       reregistered = true;
-      impl_->ensureRegistered(true);
+      ensureRegistered(true);
       continue;
     }
-    const std::string what = "flush " + std::to_string(flush.flushIndex) + " of chain " +
-                             std::to_string(flush.chainIndex) + " of " + chain.jobId;
     if (!isTransient(status.error_code()) || std::chrono::steady_clock::now() > giveUp) {
       throw std::runtime_error("cannot deliver " + what + ": " + describe(status));
     }
-    impl_->log("retrying " + what + ": " + describe(status));
+    log("retrying " + what + ": " + describe(status));
     std::this_thread::sleep_for(std::chrono::duration<double>(backoff));
     backoff = std::min(backoff * 2, 5.0);
   }

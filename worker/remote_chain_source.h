@@ -7,6 +7,7 @@
 #include <string>
 
 #include "worker/chain_source.h"
+#include "worker/flush_batcher.h"
 
 namespace farm {
 
@@ -16,6 +17,10 @@ struct RemoteSourceOptions {
   std::string cacheDir;     // scene bundles, by content hash
   std::string version = "farm-worker";
   double uploadRetrySeconds = 60;  // give up delivering a flush after this long
+  // > 0: the flushes of this worker's chains of one job go as one summed upload, sent when
+  // every such chain has flushed or this long after the first did (worker/flush_batcher.h);
+  // 0: each flush on its own.
+  double batchWindowSeconds = 0;
   std::function<void(const std::string&)> log;
 };
 
@@ -28,6 +33,9 @@ class RemoteChainSource final : public ChainSource {
   void interrupt() override;
   std::shared_ptr<const RenderJob> renderJob(const LeasedChain& chain) override;
   FlushReceipt upload(const LeasedChain& chain, ChainFlush&& flush) override;
+  void release(const LeasedChain& chain) override;
+  // Uploads sent and flushes in them, with a batch window (zeros without).
+  FlushBatcher::Stats batchStats() const;
   std::vector<bool> renew(const std::vector<const LeasedChain*>& chains) override;
   double renewIntervalSeconds() const override;
 

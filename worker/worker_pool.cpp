@@ -76,6 +76,7 @@ void WorkerPool::runTask(Task* task) {
     failed = true;
     log(chainName(chain) + " failed: " + e.what());
   }
+  source_->release(chain);
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (failed) ++stats_.chainsFailed;

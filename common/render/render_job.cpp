@@ -224,8 +224,10 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
   const int64_t planned = plannedWork();
   const int64_t pixels = int64_t(width()) * height();
   // Flush about once per image's worth of work per chain: large enough that a flush's cost
-  // (the whole film) is small against the work it carries.
-  const int64_t interval = std::clamp<int64_t>(pixels, 4096, int64_t(1) << 20);
+  // (the whole film) is small against the work it carries. Unless the user says otherwise.
+  const int64_t interval = settings_.flushInterval > 0
+                               ? settings_.flushInterval
+                               : std::clamp<int64_t>(pixels, 4096, int64_t(1) << 20);
   std::vector<ChainSpec> specs;
   int64_t first = 0;
   for (int c = 0; c < chains; ++c) {
@@ -282,8 +284,12 @@ std::vector<ChainSpec> RenderJob::planTiles(const BootstrapResult& bootstrap) co
       s.tileHeight = std::min(kTile, height() - y);
       const int64_t tilePixels = int64_t(s.tileWidth) * s.tileHeight;
       s.budget = spp < 0 ? -1 : tilePixels * spp;
-      // Flush every few thousand seeds, in whole passes over the tile.
-      const int64_t passes = std::max<int64_t>(1, 4096 / tilePixels);
+      // Flush every few thousand seeds (or what the user asked for), in whole passes over the
+      // tile.
+      const int64_t passes =
+          settings_.flushInterval > 0
+              ? std::max<int64_t>(1, (settings_.flushInterval + tilePixels - 1) / tilePixels)
+              : std::max<int64_t>(1, 4096 / tilePixels);
       s.flushInterval =
           s.budget > 0 ? std::min(passes * tilePixels, s.budget) : passes * tilePixels;
       s.erptChains = settings_.erptChains;

@@ -37,6 +37,8 @@ std::string RenderSettings::validate() const {
     err << "ERPT chains per seed must be in (0, 1024], not " << erptChains;
   } else if (erptLength < 1 || erptLength > 1 << 20) {
     err << "ERPT chain length must be in 1.." << (1 << 20) << " mutations, not " << erptLength;
+  } else if (flushInterval < 0 || flushInterval > (int64_t(1) << 40)) {
+    err << "--flush-every must be 0 (one film's worth) or up to 2^40, not " << flushInterval;
   } else if (mediumSamples < 1 || mediumSamples > 1024) {
     err << "--medium-samples must be in 1..1024 estimates, not " << mediumSamples;
   } else if (mediumMarchSteps < 0 || mediumMarchSteps > 1 << 16) {

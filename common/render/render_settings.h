@@ -29,6 +29,10 @@ struct RenderSettings {
   // per segment (deterministic, biased by the step).
   int mediumSamples = 1;
   int mediumMarchSteps = 0;
+  // Mutations (or samples) a chain runs between flushes; 0: one film's worth (the pixel count,
+  // within 4096 .. 2^20). Longer intervals mean fewer, denser uploads (README, "Scale") and
+  // more work lost with a worker that dies.
+  int64_t flushInterval = 0;
 
   // Empty when the settings are usable, otherwise what is wrong (for the user, one line).
   std::string validate() const;

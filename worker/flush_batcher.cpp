@@ -1,0 +1,98 @@
+#include "worker/flush_batcher.h"
+
+#include <algorithm>
+#include <exception>
+#include <stdexcept>
+
+namespace farm {
+
+FlushBatcher::FlushBatcher(double windowSeconds, Send send)
+    : window_(std::chrono::duration_cast<Clock::duration>(
+          std::chrono::duration<double>(std::max(0.0, windowSeconds)))),
+      send_(std::move(send)) {}
+
+void FlushBatcher::chainStarted(const std::string& jobId) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++jobs_[jobId].running;
+}
+
+void FlushBatcher::chainEnded(const std::string& jobId) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    JobQueue& queue = jobs_[jobId];
+    queue.running = std::max(0, queue.running - 1);
+  }
+  changed_.notify_all();  // the batch may be full now
+}
+
+FlushBatcher::Stats FlushBatcher::stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
+}
+
+FlushReceipt FlushBatcher::upload(const LeasedChain& chain, ChainFlush&& flush) {
+  Waiting self;
+  self.item.chain = &chain;
+  self.item.flush = std::move(flush);
+  std::unique_lock<std::mutex> lock(mutex_);
+  JobQueue& queue = jobs_[chain.jobId];  // map nodes stay put: the reference outlives inserts
+  if (queue.pending.empty()) queue.first = Clock::now();
+  queue.pending.push_back(&self);
+  changed_.notify_all();
+  while (!self.done) {
+    const bool full = int(queue.pending.size()) >= std::max(1, queue.running);
+    const bool due = Clock::now() >= queue.first + window_;
+    if (!queue.sending && !queue.pending.empty() && (full || due)) {
+      // This thread sends the batch and answers everyone in it.
+      std::vector<Waiting*> batch;
+      batch.swap(queue.pending);
+      queue.sending = true;
+      ++stats_.batches;
+      stats_.flushes += int64_t(batch.size());
+      lock.unlock();
+      std::vector<BatchItem*> items;
+      for (Waiting* w : batch) items.push_back(&w->item);
+      std::vector<BatchAnswer> answers;
+      std::string failure;
+      try {
+        answers = send_(items);
+        if (answers.size() != items.size()) failure = "the batch's answer does not match it";
+      } catch (const std::exception& e) {
+        failure = e.what();
+      }
+      lock.lock();
+      queue.sending = false;
+      std::vector<Waiting*> resend;
+      for (size_t i = 0; i < batch.size(); ++i) {
+        if (!failure.empty()) {
+          batch[i]->answer.kind = BatchAnswer::Kind::kError;
+          batch[i]->answer.error = failure;
+        } else if (answers[i].kind == BatchAnswer::Kind::kResend) {
+          resend.push_back(batch[i]);
+          continue;
+        } else {
+          batch[i]->answer = std::move(answers[i]);
+        }
+        batch[i]->done = true;
+      }
+      if (!resend.empty()) {
+        // Ahead of what arrived meanwhile, and due at once.
+        resend.insert(resend.end(), queue.pending.begin(), queue.pending.end());
+        queue.pending = std::move(resend);
+        queue.first = Clock::now() - window_;
+      }
+      changed_.notify_all();
+      continue;
+    }
+    if (queue.sending || queue.pending.empty()) {
+      changed_.wait(lock);
+    } else {
+      changed_.wait_until(lock, queue.first + window_);
+    }
+  }
+  lock.unlock();
+  if (self.answer.kind == BatchAnswer::Kind::kError) throw std::runtime_error(self.answer.error);
+  return self.answer.receipt;
+}
+
+}  // namespace farm

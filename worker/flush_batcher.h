@@ -1,0 +1,87 @@
+#pragma once
+// Sums the flushes of the chains a worker runs for one job into one upload (issue 8, part 4):
+// the coordinator's ingest is bounded by bytes and flushes a second, and a worker's chains of
+// one job flush at about the same moments, so one summed film in place of N cuts both by N.
+//
+// A chain's thread hands its flush to upload() and waits for the answer, as it waits for a
+// single upload (a chain has at most one flush unanswered, so a batch holds at most one flush
+// a chain). The batch goes out when every chain of the job this worker runs has a flush in it,
+// or `windowSeconds` after its first flush arrived, whichever is first; the thread that finds
+// it due sends it and hands every waiting thread its answer. Chains answered together start
+// their next interval together, so after the first batch they stay in step. Transport-free:
+// `send` does the sending, so that the pool's tests can drive it without a network.
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "worker/chain_source.h"
+
+namespace farm {
+
+struct BatchItem {
+  const LeasedChain* chain = nullptr;
+  ChainFlush flush;
+};
+
+// What became of one flush of a batch.
+struct BatchAnswer {
+  enum class Kind {
+    kReceipt,  // counted, a duplicate, or discarded: `receipt` says which
+    kResend,   // sound but not counted (another flush held the batch back): send it again
+    kError,    // cannot be delivered (`error` says why): the chain stops
+  };
+  Kind kind = Kind::kError;
+  FlushReceipt receipt;
+  std::string error;
+};
+
+class FlushBatcher {
+ public:
+  // Sends one batch of flushes of one job; returns one answer per item, in order. May throw:
+  // every item then gets the exception's message as its error.
+  using Send = std::function<std::vector<BatchAnswer>(const std::vector<BatchItem*>& items)>;
+
+  FlushBatcher(double windowSeconds, Send send);
+
+  // A chain of the job started or ended on this worker: a batch is full when it holds a flush
+  // of every chain the worker runs for its job.
+  void chainStarted(const std::string& jobId);
+  void chainEnded(const std::string& jobId);
+
+  // Blocks until the flush has been sent (in some batch) and answered; throws
+  // std::runtime_error when it cannot be delivered.
+  FlushReceipt upload(const LeasedChain& chain, ChainFlush&& flush);
+
+  struct Stats {
+    int64_t batches = 0;  // uploads sent
+    int64_t flushes = 0;  // flushes in them (resent ones once per sending)
+  };
+  Stats stats() const;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  struct Waiting {
+    BatchItem item;
+    bool done = false;
+    BatchAnswer answer;
+  };
+  struct JobQueue {
+    std::vector<Waiting*> pending;  // in arrival order
+    Clock::time_point first;        // when the oldest pending flush arrived
+    int running = 0;                // chains of the job this worker runs
+    bool sending = false;
+  };
+
+  const Clock::duration window_;
+  const Send send_;
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::map<std::string, JobQueue> jobs_;
+  Stats stats_;
+};
+
+}  // namespace farm
