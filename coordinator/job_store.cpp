@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <set>
 
 #include "proto/convert.h"
 #include "proto/coordinator_store.pb.h"
@@ -308,10 +309,12 @@ bool decodeRecord(const std::string& bytes, FlushBatch* batch, std::string* erro
   return true;
 }
 
+// The counts and resume points; the film goes to `sumsFile` (beside the database) when named.
 std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
-                             const std::vector<ChainScheduler::ChainSnapshot>& chains) {
+                             const std::vector<ChainScheduler::ChainSnapshot>& chains,
+                             const std::string& sumsFile = "") {
   store::v1::CheckpointRecord r;
-  r.set_sums_zstd(compressVector(s.sums));
+  r.set_sums_file(sumsFile);
   r.set_work_done(s.workDone);
   r.set_rejected_nan(s.rejected.nan);
   r.set_rejected_infinite(s.rejected.infinite);
@@ -329,18 +332,40 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
   return r.SerializeAsString();
 }
 
-// `values` is the film's size (width*height*3), or 0 for the counts a finished job keeps.
-bool decodeCheckpoint(const std::string& bytes, size_t values, SplatAggregator::Snapshot* s,
-                      std::vector<ChainScheduler::ChainSnapshot>* chains, std::string* error) {
+// `values` is the film's size (width*height*3), or 0 for the counts a finished job keeps; the
+// film is read from `logDir`/sums_file. *sumsFile: the file the record names ("" for none).
+bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string& logDir,
+                      SplatAggregator::Snapshot* s,
+                      std::vector<ChainScheduler::ChainSnapshot>* chains, std::string* sumsFile,
+                      std::string* error) {
   store::v1::CheckpointRecord r;
   if (!r.ParseFromString(bytes)) {
     *error = "unreadable checkpoint record";
     return false;
   }
-  s->sums.assign(values, 0.0);
-  if (values > 0 && !zstdDecompressExact(r.sums_zstd(), s->sums.data(), values * sizeof(double))) {
-    *error = "the checkpoint's sums are corrupt or of another film size";
+  *sumsFile = r.sums_file();
+  if (sumsFile->find('/') != std::string::npos) {
+    *error = "a checkpoint names the file '" + *sumsFile + "'";
     return false;
+  }
+  s->sums.assign(values, 0.0);
+  if (values > 0) {
+    std::string frame = r.sums_zstd();
+    if (!sumsFile->empty()) {
+      const std::string path = (fs::path(logDir) / *sumsFile).string();
+      std::ifstream in(path, std::ios::binary);
+      frame.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+      if (!in.good() && !in.eof()) {
+        *error = "cannot read the checkpoint's film " + path;
+        return false;
+      }
+    }
+    if (!zstdDecompressExact(frame, s->sums.data(), values * sizeof(double))) {
+      *error = "the checkpoint's film " +
+               (sumsFile->empty() ? std::string("in the database") : *sumsFile) +
+               " is missing, corrupt or of another film size";
+      return false;
+    }
   }
   s->workDone = r.work_done();
   s->rejected.nan = r.rejected_nan();
@@ -572,6 +597,10 @@ Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::stri
     resetLogLocked(id);
     std::error_code ec;
     fs::remove(logPath(id), ec);
+    if (auto it = sumsFiles_.find(id); it != sumsFiles_.end()) {
+      fs::remove(fs::path(logDir_) / it->second, ec);
+      sumsFiles_.erase(it);
+    }
   }
   return st;
 }
@@ -653,8 +682,20 @@ Status JobStore::appendRecord(const std::string& id, const std::string& record,
 
 Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapshot& sums,
                             const std::vector<ChainScheduler::ChainSnapshot>& chains) {
-  const std::string record = encodeCheckpoint(sums, chains);
+  if (id.empty() || id.find('/') != std::string::npos || id.find("..") != std::string::npos) {
+    return Status::invalidArgument("job id '" + id + "' cannot name a file");
+  }
+  const std::string frame = compressVector(sums.sums);  // outside the lock
   std::lock_guard<std::mutex> lock(mutex_);
+  // The film goes beside the database, written once (a blob would go through the WAL, twice),
+  // under a name of its own: on disk, under its final name, before the record that names it
+  // commits; the previous film is removed only after. A crash in between leaves a file that no
+  // record names, which the next open removes.
+  const std::string name =
+      id + "." + std::to_string(generation_) + "." + std::to_string(++sumsWritten_) + ".sums";
+  const std::string path = (fs::path(logDir_) / name).string();
+  if (Status st = writeDurably(path, frame); !st.isOk()) return st;
+  const std::string record = encodeCheckpoint(sums, chains, name);
   Status st = transaction("cannot checkpoint job " + id, [&] {
     return Statement(db_, "INSERT OR REPLACE INTO checkpoints(job, record) VALUES(?, ?)")
                .bind(1, id)
@@ -663,8 +704,43 @@ Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapsh
            Statement(db_, "UPDATE jobs SET tail_bytes = 0 WHERE id = ?").bind(1, id).run() &&
            Statement(db_, "DELETE FROM flushes WHERE job = ?").bind(1, id).run();
   });
-  if (st.isOk()) resetLogLocked(id);
+  std::error_code ec;
+  if (!st.isOk()) {
+    fs::remove(path, ec);
+    return st;
+  }
+  resetLogLocked(id);
+  auto previous = sumsFiles_.find(id);
+  if (previous != sumsFiles_.end() && previous->second != name) {
+    fs::remove(fs::path(logDir_) / previous->second, ec);
+  }
+  sumsFiles_[id] = name;
   return st;
+}
+
+Status JobStore::writeDurably(const std::string& path, const std::string& bytes) {
+  const std::string temporary = path + ".tmp";
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return Status::internal("cannot write " + temporary + ": " + std::strerror(errno));
+  for (size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string why = std::strerror(errno);
+      ::close(fd);
+      return Status::internal("cannot write " + temporary + ": " + why);
+    }
+    done += size_t(n);
+  }
+  if (::fdatasync(fd) != 0 || ::close(fd) != 0 || ::rename(temporary.c_str(), path.c_str()) != 0) {
+    return Status::internal("cannot write " + path + ": " + std::strerror(errno));
+  }
+  // The rename is durable once the directory is.
+  const int dir = ::open(logDir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const bool synced = dir >= 0 && ::fsync(dir) == 0;
+  if (dir >= 0) ::close(dir);
+  if (!synced) return Status::internal("cannot sync " + logDir_ + ": " + std::strerror(errno));
+  return Status::ok();
 }
 
 Status JobStore::addErrorSample(const std::string& id, uint32_t index, const ErrorSample& e) {
@@ -714,9 +790,12 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
                                 ? size_t(job.plan->width) * size_t(job.plan->height) * 3
                                 : 0;
       SplatAggregator::Snapshot snapshot;
-      if (!decodeCheckpoint(q.bytes(6), values, &snapshot, &job.checkpointChains, &problem)) {
+      std::string sumsFile;
+      if (!decodeCheckpoint(q.bytes(6), values, logDir_, &snapshot, &job.checkpointChains,
+                            &sumsFile, &problem)) {
         return corrupt(problem);
       }
+      if (!sumsFile.empty()) sumsFiles_[job.id] = sumsFile;
       if (job.phase == JobPhase::kRendering &&
           job.checkpointChains.size() != job.plan->chains.size()) {
         return corrupt("a checkpoint of " + std::to_string(job.checkpointChains.size()) +
@@ -756,6 +835,17 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
     jobs->push_back(std::move(job));
   }
   if (rc != SQLITE_DONE) return fail("cannot read jobs");
+  // Checkpoint films no record names: written before a crash kept their record from
+  // committing, or left behind by one that kept the previous film from being removed.
+  std::set<std::string> named;
+  for (const auto& [job, file] : sumsFiles_) named.insert(file);
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(logDir_, ec)) {
+    const std::string file = e.path().filename().string();
+    const bool film = e.path().extension() == ".sums" ||
+                      (e.path().extension() == ".tmp" && e.path().stem().extension() == ".sums");
+    if (film && !named.count(file)) fs::remove(e.path(), ec);
+  }
   return Status::ok();
 }
 

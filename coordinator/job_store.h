@@ -13,7 +13,11 @@
 // flush cost 0.6 s of the coordinator's time against 0.16 s in memory (tests/farm_load.cpp). The
 // log of a job's flushes is folded now and then into a checkpoint (the summed film and every
 // chain's resume point) in the same transaction that deletes the folded rows, so a restart reads
-// one checkpoint and replays a bounded tail of the log, never summing a flush twice.
+// one checkpoint and replays a bounded tail of the log, never summing a flush twice. The
+// checkpoint's film, 50 MB of doubles at 1080p before compression, is a file of its own beside
+// the log (DIR/logs/<job>.<generation>.<n>.sums), synced before the record that names it
+// commits and removed once another one has; films no record names (a crash between the two)
+// are removed at the next open.
 #include <algorithm>
 #include <cstdint>
 #include <functional>
@@ -105,7 +109,7 @@ class JobStore {
   // The same for a batch (one record: its film once, then its entries); `wire` is its film's.
   Status appendBatch(const std::string& id, const FlushBatch& batch, double elapsedSeconds,
                      uint64_t* tailBytes, const EncodedSplats* wire = nullptr);
-  // Replaces the job's log so far by this state of its sums and chains.
+  // Replaces the job's log so far by this state of its sums (a file beside the log) and chains.
   Status checkpoint(const std::string& id, const SplatAggregator::Snapshot& sums,
                     const std::vector<ChainScheduler::ChainSnapshot>& chains);
   Status addErrorSample(const std::string& id, uint32_t index, const ErrorSample& sample);
@@ -123,6 +127,9 @@ class JobStore {
   std::string logPath(const std::string& id) const;
   Status appendRecord(const std::string& id, const std::string& record, const std::string& what,
                       double elapsedSeconds, uint64_t* tailBytes);
+  // `bytes` to `path` in DIR/logs by way of a temporary file, synced, renamed, the directory
+  // synced: all of it or none of it is there after a crash.
+  Status writeDurably(const std::string& path, const std::string& bytes);
   Status openLogLocked(const std::string& id, FlushLog** log);
   void resetLogLocked(const std::string& id);
   Status exec(const char* sql);
@@ -135,6 +142,9 @@ class JobStore {
   const std::string path_;
   const std::string logDir_;  // DIR/logs
   std::map<std::string, FlushLog> logs_;
+  // Each rendering job's checkpoint film, DIR/logs/<job>.<generation>.<n>.sums.
+  std::map<std::string, std::string> sumsFiles_;
+  uint64_t sumsWritten_ = 0;
   uint64_t generation_ = 0;
   uint64_t checkpointBytes_ = 0;
   std::mutex mutex_;  // one connection, one writer at a time

@@ -251,9 +251,27 @@ TEST_P(DurableResumeTest, RestartedCoordinatorGoesOnFromItsLastFlush) {
     std::ofstream(log, std::ios::binary | std::ios::app)
         << (bytes.empty() ? std::string(1000, '\x7f') : bytes);
   }
+  // Checkpoint films beside the database: the one a checkpoint record names, and leftovers of
+  // a crash between writing one and committing its record, which a restart removes.
+  const std::string logs = scratch / "durable/logs";
+  auto films = [&] {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(logs)) {
+      const std::string name = e.path().filename().string();
+      if (name.find(".sums") != std::string::npos) names.push_back(name);
+    }
+    return names;
+  };
+  std::ofstream(logs + "/" + job + ".0.7.sums") << "left by a crash";
+  std::ofstream(logs + "/" + job + ".0.8.sums.tmp") << "left by a crash";
   for (int restart = 1; restart <= 2; ++restart) {
     SCOPED_TRACE("restart " + std::to_string(restart));
     Coordinator again(options);
+    // Each restart replays a log and folds it into a checkpoint: its film, and nothing else.
+    const std::vector<std::string> kept = films();
+    ASSERT_EQ(kept.size(), 1u) << (kept.empty() ? "" : kept[0]);
+    EXPECT_EQ(kept[0].rfind(job + ".", 0), 0u) << kept[0];
+    EXPECT_GT(std::filesystem::file_size(logs + "/" + kept[0]), 0u);
     JobProgress p;
     ASSERT_TRUE(again.progress(job, 0, &p).isOk());
     EXPECT_EQ(p.phase, JobPhase::kRendering) << p.error;
@@ -291,6 +309,7 @@ TEST_P(DurableResumeTest, RestartedCoordinatorGoesOnFromItsLastFlush) {
     } else {
       for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(again, worker, lease, 99), 2);
       EXPECT_LT(worstRelativeDifference(finish(again, job), expected), 1e-5);
+      EXPECT_TRUE(films().empty()) << "the job ended: its film is in its image now";
     }
   }
 
@@ -301,6 +320,7 @@ TEST_P(DurableResumeTest, RestartedCoordinatorGoesOnFromItsLastFlush) {
   EXPECT_EQ(p.phase, JobPhase::kDone) << p.error;
   EXPECT_EQ(p.workDone, 32 * 32 * 32);
   EXPECT_DOUBLE_EQ(p.fraction, 1.0);
+  EXPECT_TRUE(films().empty()) << "an ended job keeps its image, not its film";
   Image image;
   ASSERT_TRUE(after.finalImage(job, &image, nullptr).isOk());
   EXPECT_LT(worstRelativeDifference(image, expected), 1e-5);
