@@ -321,6 +321,34 @@ TEST(FlushBatcher, ALoneFlushGoesWhenTheWindowEndsOrItsPeerEnds) {
   EXPECT_EQ(recorder.batches.size(), 2u);
 }
 
+// A waiting chain's thread is idle: once a chain's interval is known, its flush waits for its
+// peers at most kWaitShare of it, however long the window.
+TEST(FlushBatcher, AFlushWaitsAtMostAShareOfItsChainsInterval) {
+  Recorder recorder;
+  recorder.answer = [](const BatchItem&, int) { return accepted(); };
+  FlushBatcher batcher(5, [&](const std::vector<BatchItem*>& items) { return recorder(items); });
+  const LeasedChain a = chainOf("job-a", 0), b = chainOf("job-a", 1);
+  batcher.chainStarted("job-a");
+  batcher.chainStarted("job-a");
+  std::thread peer([&] { batcher.upload(b, flushOf(1, 0)); });
+  EXPECT_TRUE(batcher.upload(a, flushOf(0, 0)).accepted);  // both: sent at once
+  peer.join();
+  std::this_thread::sleep_for(milliseconds(200));  // chain 0 renders its next flush
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_TRUE(batcher.upload(a, flushOf(0, 1)).accepted);  // chain 1 is still rendering
+  const auto waited = std::chrono::steady_clock::now() - start;
+  // 5% of 200 ms is 10 ms; a loaded machine may add scheduling delay, never the 5 s window.
+  EXPECT_LT(waited, milliseconds(1000));
+  ASSERT_EQ(recorder.batches.size(), 2u);
+  EXPECT_EQ(recorder.batches[1].size(), 1u);
+  // A chain that joins the job later waits by the job's interval too, not the window.
+  const LeasedChain c = chainOf("job-a", 2);
+  batcher.chainStarted("job-a");
+  const auto joined = std::chrono::steady_clock::now();
+  EXPECT_TRUE(batcher.upload(c, flushOf(2, 0)).accepted);
+  EXPECT_LT(std::chrono::steady_clock::now() - joined, milliseconds(1000));
+}
+
 TEST(FlushBatcher, SendsAgainWhatWasHeldBackAndFailsWhatCannotBeDelivered) {
   Recorder recorder;
   // Chain 0's first sending is held back by chain 1's refusal; it goes again alone.

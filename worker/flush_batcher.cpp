@@ -36,12 +36,27 @@ FlushReceipt FlushBatcher::upload(const LeasedChain& chain, ChainFlush&& flush) 
   self.item.flush = std::move(flush);
   std::unique_lock<std::mutex> lock(mutex_);
   JobQueue& queue = jobs_[chain.jobId];  // map nodes stay put: the reference outlives inserts
-  if (queue.pending.empty()) queue.first = Clock::now();
+  const Clock::time_point arrived = Clock::now();
+  // How long this flush may wait for its peers: the window, and no more than a share of the
+  // time its chain took since its previous answer; for a chain's first flush, of the last
+  // interval any chain of the job took (none yet: the window).
+  if (auto last = queue.answered.find(self.item.flush.chainIndex); last != queue.answered.end()) {
+    queue.interval = arrived - last->second;
+  }
+  Clock::duration wait = window_;
+  if (queue.interval > Clock::duration::zero()) {
+    wait = std::min(wait, std::chrono::duration_cast<Clock::duration>(queue.interval * kWaitShare));
+  }
+  if (queue.pending.empty()) {
+    queue.due = arrived + wait;
+  } else {
+    queue.due = std::min(queue.due, arrived + wait);
+  }
   queue.pending.push_back(&self);
   changed_.notify_all();
   while (!self.done) {
     const bool full = int(queue.pending.size()) >= std::max(1, queue.running);
-    const bool due = Clock::now() >= queue.first + window_;
+    const bool due = Clock::now() >= queue.due;
     if (!queue.sending && !queue.pending.empty() && (full || due)) {
       // This thread sends the batch and answers everyone in it.
       std::vector<Waiting*> batch;
@@ -79,7 +94,7 @@ FlushReceipt FlushBatcher::upload(const LeasedChain& chain, ChainFlush&& flush) 
         // Ahead of what arrived meanwhile, and due at once.
         resend.insert(resend.end(), queue.pending.begin(), queue.pending.end());
         queue.pending = std::move(resend);
-        queue.first = Clock::now() - window_;
+        queue.due = Clock::now();
       }
       changed_.notify_all();
       continue;
@@ -87,9 +102,10 @@ FlushReceipt FlushBatcher::upload(const LeasedChain& chain, ChainFlush&& flush) 
     if (queue.sending || queue.pending.empty()) {
       changed_.wait(lock);
     } else {
-      changed_.wait_until(lock, queue.first + window_);
+      changed_.wait_until(lock, queue.due);
     }
   }
+  queue.answered[self.item.flush.chainIndex] = Clock::now();
   lock.unlock();
   if (self.answer.kind == BatchAnswer::Kind::kError) throw std::runtime_error(self.answer.error);
   return self.answer.receipt;

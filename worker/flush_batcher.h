@@ -6,10 +6,14 @@
 // A chain's thread hands its flush to upload() and waits for the answer, as it waits for a
 // single upload (a chain has at most one flush unanswered, so a batch holds at most one flush
 // a chain). The batch goes out when every chain of the job this worker runs has a flush in it,
-// or `windowSeconds` after its first flush arrived, whichever is first; the thread that finds
-// it due sends it and hands every waiting thread its answer. Chains answered together start
-// their next interval together, so after the first batch they stay in step. Transport-free:
-// `send` does the sending, so that the pool's tests can drive it without a network.
+// or when its first flush has waited long enough, whichever is first: `windowSeconds`, and at
+// most kWaitShare of the time that chain took to render its flush (for a chain's first flush,
+// the last time any chain of the job took): a waiting chain's thread is idle, so the wait is
+// bounded by a share of the work. The thread that finds the batch due
+// sends it and hands every waiting thread its answer. Chains answered together start their next
+// interval together, so they stay in step as far as their intervals' lengths agree.
+// Transport-free: `send` does the sending, so that the pool's tests can drive it without a
+// network.
 #include <chrono>
 #include <condition_variable>
 #include <functional>
@@ -41,6 +45,9 @@ struct BatchAnswer {
 
 class FlushBatcher {
  public:
+  // The most a flush waits for its peers, as a share of the time its chain took to render it.
+  static constexpr double kWaitShare = 0.05;
+
   // Sends one batch of flushes of one job; returns one answer per item, in order. May throw:
   // every item then gets the exception's message as its error.
   using Send = std::function<std::vector<BatchAnswer>(const std::vector<BatchItem*>& items)>;
@@ -71,9 +78,11 @@ class FlushBatcher {
   };
   struct JobQueue {
     std::vector<Waiting*> pending;  // in arrival order
-    Clock::time_point first;        // when the oldest pending flush arrived
+    Clock::time_point due;          // when the oldest pending flush has waited long enough
     int running = 0;                // chains of the job this worker runs
     bool sending = false;
+    std::map<uint32_t, Clock::time_point> answered;  // per chain: its last flush's answer
+    Clock::duration interval{};                      // the last a chain took between flushes
   };
 
   const Clock::duration window_;
