@@ -222,6 +222,23 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   return true;
 }
 
+// Whether a job id can name files in DIR/logs (its log and its checkpoint films).
+bool namesAFile(const std::string& id) {
+  return !id.empty() && id.find('/') == std::string::npos && id.find("..") == std::string::npos;
+}
+
+// All of `bytes` at `offset` of `fd`, through short writes and interruptions; false with errno
+// set when the system refuses.
+bool writeFully(int fd, const std::string& bytes, uint64_t offset) {
+  for (size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::pwrite(fd, bytes.data() + done, bytes.size() - done, off_t(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += size_t(n);
+  }
+  return true;
+}
+
 // A flush's place, counts and state (everything but its film).
 void encodeEntry(const ChainFlush& flush, store::v1::FlushRecord* r) {
   r->set_chain_index(flush.chainIndex);
@@ -401,9 +418,7 @@ Status JobStore::openLogLocked(const std::string& id, FlushLog** out) {
     *out = &it->second;
     return Status::ok();
   }
-  if (id.empty() || id.find('/') != std::string::npos || id.find("..") != std::string::npos) {
-    return Status::invalidArgument("job id '" + id + "' cannot name a log file");
-  }
+  if (!namesAFile(id)) return Status::invalidArgument("job id '" + id + "' cannot name a log file");
   // Bytes past the last committed record are a flush whose commit never happened (a crash
   // between the append and the commit, or a failed commit): cut them off.
   Statement q(db_, "SELECT IFNULL(MAX(offset + length), 0) FROM flushes WHERE job = ?");
@@ -645,14 +660,7 @@ Status JobStore::appendRecord(const std::string& id, const std::string& record,
   // The record goes beside the database, on disk before the row that points at it is
   // committed: a flush's bytes are written once (a blob in SQLite's WAL is written twice, page
   // by page), and a crash between the two leaves bytes that no row points at.
-  for (size_t done = 0; done < record.size();) {
-    const ssize_t n =
-        ::pwrite(log->fd, record.data() + done, record.size() - done, off_t(log->end + done));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return Status::internal(what + ": " + logPath(id) + ": " + std::strerror(errno));
-    done += size_t(n);
-  }
-  if (::fdatasync(log->fd) != 0) {
+  if (!writeFully(log->fd, record, log->end) || ::fdatasync(log->fd) != 0) {
     return Status::internal(what + ": " + logPath(id) + ": " + std::strerror(errno));
   }
   int64_t tail = 0;
@@ -682,9 +690,7 @@ Status JobStore::appendRecord(const std::string& id, const std::string& record,
 
 Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapshot& sums,
                             const std::vector<ChainScheduler::ChainSnapshot>& chains) {
-  if (id.empty() || id.find('/') != std::string::npos || id.find("..") != std::string::npos) {
-    return Status::invalidArgument("job id '" + id + "' cannot name a file");
-  }
+  if (!namesAFile(id)) return Status::invalidArgument("job id '" + id + "' cannot name a file");
   const std::string frame = compressVector(sums.sums);  // outside the lock
   std::lock_guard<std::mutex> lock(mutex_);
   // The film goes beside the database, written once (a blob would go through the WAL, twice),
@@ -722,15 +728,10 @@ Status JobStore::writeDurably(const std::string& path, const std::string& bytes)
   const std::string temporary = path + ".tmp";
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return Status::internal("cannot write " + temporary + ": " + std::strerror(errno));
-  for (size_t done = 0; done < bytes.size();) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string why = std::strerror(errno);
-      ::close(fd);
-      return Status::internal("cannot write " + temporary + ": " + why);
-    }
-    done += size_t(n);
+  if (!writeFully(fd, bytes, 0)) {
+    const std::string why = std::strerror(errno);
+    ::close(fd);
+    return Status::internal("cannot write " + temporary + ": " + why);
   }
   if (::fdatasync(fd) != 0 || ::close(fd) != 0 || ::rename(temporary.c_str(), path.c_str()) != 0) {
     return Status::internal("cannot write " + path + ": " + std::strerror(errno));

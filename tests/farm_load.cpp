@@ -119,6 +119,19 @@ std::shared_ptr<grpc::Channel> channel(const std::string& address) {
   return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
 }
 
+// The header, then the splat bytes in chunks, as a worker streams them.
+grpc::Status sendUpload(grpc::ClientWriter<v1::UploadFlushRequest>* writer,
+                        const v1::UploadFlushRequest& header, const std::string& bytes) {
+  bool open = writer->Write(header);
+  for (size_t at = 0; open && at < bytes.size(); at += kMaxChunkBytes) {
+    v1::UploadFlushRequest chunk;
+    chunk.set_splats(bytes.data() + at, std::min(kMaxChunkBytes, bytes.size() - at));
+    open = writer->Write(chunk);
+  }
+  writer->WritesDone();
+  return writer->Finish();
+}
+
 grpc::Status uploadOnce(v1::WorkerApi::Stub* stub, const std::string& jobId, const SimChain& c,
                         const SampleFlush& s, v1::UploadFlushResponse* response) {
   grpc::ClientContext context;
@@ -151,15 +164,7 @@ grpc::Status uploadOnce(v1::WorkerApi::Stub* stub, const std::string& jobId, con
   h->set_compressed(s.splats.compressed);
   h->set_raw_splat_bytes(s.splats.rawBytes);
   h->set_checksum(s.checksum);
-  bool open = writer->Write(message);
-  for (size_t at = 0; open && at < s.splats.bytes.size(); at += kMaxChunkBytes) {
-    v1::UploadFlushRequest chunk;
-    chunk.set_splats(s.splats.bytes.data() + at,
-                     std::min(kMaxChunkBytes, s.splats.bytes.size() - at));
-    open = writer->Write(chunk);
-  }
-  writer->WritesDone();
-  return writer->Finish();
+  return sendUpload(writer.get(), message, s.splats.bytes);
 }
 
 // One upload of a simulated worker's chains as a batch: `film` is their films summed; each
@@ -191,15 +196,7 @@ grpc::Status uploadBatch(v1::WorkerApi::Stub* stub, const std::string& jobId,
   h->set_compressed(film.splats.compressed);
   h->set_raw_splat_bytes(film.splats.rawBytes);
   h->set_checksum(digest.hexDigest());
-  bool open = writer->Write(message);
-  for (size_t at = 0; open && at < film.splats.bytes.size(); at += kMaxChunkBytes) {
-    v1::UploadFlushRequest chunk;
-    chunk.set_splats(film.splats.bytes.data() + at,
-                     std::min(kMaxChunkBytes, film.splats.bytes.size() - at));
-    open = writer->Write(chunk);
-  }
-  writer->WritesDone();
-  return writer->Finish();
+  return sendUpload(writer.get(), message, film.splats.bytes);
 }
 
 double percentile(std::vector<double> v, double q) {

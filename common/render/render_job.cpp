@@ -174,8 +174,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   result.candidates = count;
   result.nonZeroCandidates = c.nonZero;
   if (settings_.algorithm == Algorithm::ERPT) {  // Z sets the deposit energy; no seeds
-    result.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.seconds = elapsed();
     return result;
   }
   const int chains = settings_.numChains > 0 ? settings_.numChains : kDefaultChains;
@@ -211,7 +210,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
     result.seedSamples.push_back(std::move(u));
     result.seedContributions.push_back(I);
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = elapsed();
   return result;
 }
 
