@@ -314,8 +314,8 @@ TEST(ClusterCoordinatorCrash, KilledCoordinatorResumesEveryJob) {
 }
 
 // `farm render --bootstrap-candidates`: a count the user gives is the count drawn, the default
-// sizes the bootstrap to the job (a small one gets the pilot), and a count out of range is a
-// clear error.
+// sizes the bootstrap to the job (a small one gets the pilot's floor), and a count out of range is
+// a clear error.
 TEST(FarmRender, BootstrapCandidatesOption) {
   ScratchDir scratch("bootstrap-option");
   ASSERT_FALSE(scratch.path().empty());
@@ -331,7 +331,7 @@ TEST(FarmRender, BootstrapCandidatesOption) {
   EXPECT_NE(given.out.find("from 5000 candidates"), std::string::npos) << given.out;
   CommandResult sized = render({});
   ASSERT_EQ(sized.exitCode, 0) << sized.err;
-  EXPECT_NE(sized.out.find("from 4096 candidates"), std::string::npos) << sized.out;
+  EXPECT_NE(sized.out.find("from 1024 candidates"), std::string::npos) << sized.out;
   for (const char* bad : {"-1", "100000000000"}) {
     CommandResult refused = render({"--bootstrap-candidates", bad});
     EXPECT_NE(refused.exitCode, 0) << bad;

@@ -31,25 +31,34 @@ double bootstrapCandidateCost(Algorithm algorithm) {
   return 0.0;
 }
 
+static int64_t clampCount(double n) {
+  if (!(n > 0)) return 0;  // NaN too
+  return int64_t(std::min(n, double(kBootstrapMaxCandidates)));
+}
+
+// N cost <= share (N cost + work): N <= share / (1 - share) * work / cost.
+static int64_t countForTime(Algorithm algorithm, int64_t plannedWork) {
+  const double cost = bootstrapCandidateCost(algorithm);
+  if (!(cost > 0) || plannedWork <= 0) return 0;
+  return clampCount(kBootstrapShare / (1 - kBootstrapShare) * double(plannedWork) / cost);
+}
+
+int64_t bootstrapPilot(Algorithm algorithm, int64_t plannedWork) {
+  if (plannedWork <= 0) return kBootstrapPilot;
+  return std::clamp(countForTime(algorithm, plannedWork), kBootstrapPilotFloor, kBootstrapPilot);
+}
+
 BootstrapSize bootstrapSize(Algorithm algorithm, int64_t plannedWork, int64_t pixels,
                             double relativeVariance) {
   BootstrapSize size;
-  const double cost = bootstrapCandidateCost(algorithm);
-  auto clampCount = [](double n) {
-    if (!(n > 0)) return int64_t(0);  // NaN too
-    return int64_t(std::min(n, double(kBootstrapMaxCandidates)));
-  };
-  // N cost <= share (N cost + work): N <= share / (1 - share) * work / cost.
-  if (cost > 0 && plannedWork > 0) {
-    size.forTime = clampCount(kBootstrapShare / (1 - kBootstrapShare) * double(plannedWork) / cost);
-  }
+  size.forTime = countForTime(algorithm, plannedWork);
   // sqrt(v / N) <= (1/3) / sqrt(M): N >= 9 v M.
   if (plannedWork > 0 && pixels > 0) {
     const double perPixel = double(plannedWork) / double(pixels);
     size.forError = clampCount(std::ceil(9 * std::max(0.0, relativeVariance) * perPixel));
   }
-  size.candidates =
-      std::clamp(std::max(size.forTime, size.forError), kBootstrapPilot, kBootstrapMaxCandidates);
+  size.candidates = std::clamp(std::max(size.forTime, size.forError),
+                               bootstrapPilot(algorithm, plannedWork), kBootstrapMaxCandidates);
   return size;
 }
 

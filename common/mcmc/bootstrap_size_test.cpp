@@ -48,8 +48,22 @@ TEST(BootstrapSize, KeepsZsErrorWithinAThirdOfAnAveragePixels) {
   EXPECT_GT(zError, 0.99 * (1.0 / 3.0) / std::sqrt(double(perPixel)));  // and no more than that
 }
 
+TEST(BootstrapSize, ThePilotTakesTheTimeShareWithinItsBounds) {
+  // A job whose share affords 2048 candidates gets a pilot of 2048; smaller ones the floor,
+  // larger ones (and time budgets, whose work is unknown) the full pilot.
+  // (2048.5 candidates' worth, so that rounding cannot tip the count either way.)
+  const int64_t work = int64_t(2048.5 * 64 * (1 - kBootstrapShare) / kBootstrapShare);
+  EXPECT_EQ(bootstrapPilot(Algorithm::MLT, work), 2048);
+  EXPECT_LE(timeShare(Algorithm::MLT, 2048, work), kBootstrapShare);
+  EXPECT_EQ(bootstrapPilot(Algorithm::MLT, work / 4), kBootstrapPilotFloor);
+  EXPECT_EQ(bootstrapPilot(Algorithm::MLT, work * 4), kBootstrapPilot);
+  EXPECT_EQ(bootstrapPilot(Algorithm::MLT, 0), kBootstrapPilot);
+  // The count never goes below the pilot: a low-variance job of that size takes it.
+  EXPECT_EQ(bootstrapSize(Algorithm::MLT, work, 256 * 256, 1e-6).candidates, 2048);
+}
+
 TEST(BootstrapSize, StaysWithinThePilotAndTheCeiling) {
-  EXPECT_EQ(bootstrapSize(Algorithm::MLT, 1000, 100, 1.0).candidates, kBootstrapPilot);
+  EXPECT_EQ(bootstrapSize(Algorithm::MLT, 1000, 100, 1.0).candidates, kBootstrapPilotFloor);
   EXPECT_EQ(bootstrapSize(Algorithm::PSSMLT, int64_t(1) << 40, int64_t(1) << 22, 1.0).candidates,
             kBootstrapMaxCandidates);
   // A variance that is not a number asks for nothing (the time share still holds).
@@ -77,8 +91,8 @@ TEST(BootstrapSize, AJobsBootstrapIsSizedToIt) {
   const BootstrapResult b = job.bootstrap();
   const int64_t work = job.plannedWork();
   ASSERT_EQ(work, 64 * 64 * 256);
-  BootstrapCandidates pilot =
-      generateCandidates(*scene, settings.algorithm, -1, settings.seed, kBootstrapPilot);
+  BootstrapCandidates pilot = generateCandidates(*scene, settings.algorithm, -1, settings.seed,
+                                                 bootstrapPilot(settings.algorithm, work));
   ASSERT_GE(pilot.nonZero, kBootstrapPilotLight);
   const BootstrapSize size =
       bootstrapSize(settings.algorithm, work, 64 * 64, pilot.relativeVariance());

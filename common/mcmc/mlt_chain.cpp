@@ -164,11 +164,15 @@ void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* f
   }
 }
 
+Rng mltChainRng(uint64_t seed, uint32_t chainIndex) {
+  return Rng(seed, streamId(kMltChainDomain, chainIndex));
+}
+
 void runMltChain(const Scene& scene, const ChainSpec& spec,
                  const std::function<bool(ChainFlush&&)>& onFlush,
                  const std::atomic<bool>* cancel) {
   const std::string chain = "chain " + std::to_string(spec.chainIndex);
-  Rng rng(spec.seed, streamId(kMltChainDomain, spec.chainIndex));
+  Rng rng = mltChainRng(spec.seed, spec.chainIndex);
   Path x;
   PathChain walker(scene, spec.maxDepth, spec.mutationMix, spec.mediumSamples,
                    spec.mediumMarchSteps);

@@ -72,6 +72,10 @@ class PathChain {
   Selection sx_;
 };
 
+// The random numbers of chain `chainIndex` of a job of `seed`: the worker's chain and the
+// bootstrap (which checks that the chain can start from its seed) draw the same.
+Rng mltChainRng(uint64_t seed, uint32_t chainIndex);
+
 // Runs the chain of spec (seedPath, mutationMix, maxDepth) to its budget, flushing through
 // onFlush; returns at once when *cancel becomes true. Throws std::runtime_error for a seed or
 // resume state that is not a path of this scene, or a seed that carries no light.

@@ -137,13 +137,13 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
     extend(count);
   } else {
     // The pilot, doubled until enough of it carries light to measure the relative variance.
-    count = kBootstrapPilot;
+    const int64_t work = plannedWork();
+    count = bootstrapPilot(settings_.algorithm, work);
     extend(count);
     while (c.nonZero < kBootstrapPilotLight && count < kBootstrapPilotMax) {
       count = std::min(2 * count, kBootstrapPilotMax);
       extend(count);
     }
-    const int64_t work = plannedWork();
     if (work > 0) {
       const BootstrapSize size =
           bootstrapSize(settings_.algorithm, work, pixels, c.relativeVariance());
@@ -188,15 +188,26 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
       Path path;
       // A candidate whose light BDPT found through a film point within rounding of the film's
       // edge may have no strategy path that projects back onto the film: f(x) = 0 there, so
-      // draw another (its share of Z is of the order of that rounding).
+      // draw another (its share of Z is of the order of that rounding). In a medium, the
+      // chain's own estimate of f(x) (ratio tracking, with the chain's numbers) may come out 0
+      // however often the chain asks where transmittance is tiny: the chain could not start
+      // there, so draw another too: the chain starts elsewhere, a start-up bias it forgets as it
+      // mixes, as it forgets that its first estimate is drawn afresh.
+      PathChain walker(*scene_, maxDepth, settings_.mutationMix, settings_.mediumSamples,
+                       settings_.mediumMarchSteps);
+      auto chainStarts = [&] {
+        Rng rng = mltChainRng(settings_.seed, uint32_t(c));
+        return walker.start(path, rng);
+      };
       int64_t candidate = i;
-      for (int attempt = 0;
-           !candidatePath(*scene_, maxDepth, settings_.seed, candidate, pick.nextDouble(), &path);
+      for (int attempt = 0; !(candidatePath(*scene_, maxDepth, settings_.seed, candidate,
+                                            pick.nextDouble(), &path) &&
+                              chainStarts());
            ++attempt) {
         if (attempt == 64)
           throw std::runtime_error("bootstrap candidate " + std::to_string(candidate) +
-                                   " and 64 others carry light but build no path: this host "
-                                   "computes differently from itself");
+                                   " and 64 others carry light but build no path a chain can "
+                                   "start from: this host computes differently from itself");
         const uint64_t hi = pick.nextUint(), lo = pick.nextUint();  // in this order
         candidate = resampleSeeds(contributions, 1, (hi << 32) | lo)[0];
       }
