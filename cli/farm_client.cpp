@@ -72,7 +72,8 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->hasReference = m.has_reference();
   p->errorSeries.clear();
   for (const v1::ErrorSample& e : m.error_series()) {
-    p->errorSeries.push_back({e.elapsed_seconds(), e.samples(), e.rmse(), e.relmse()});
+    p->errorSeries.push_back(
+        {e.elapsed_seconds(), e.samples(), e.rmse(), e.relmse(), e.estimated_relmse()});
   }
   p->errorSeriesTotal = m.error_series_total();
   p->width = m.width();

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cli/compare.h"
 #include "cli/embedded_render.h"
 #include "cli/farm_client.h"
 #include "cli/render_report.h"
@@ -36,6 +37,13 @@ extern "C" void onInterrupt(int) {
   gInterrupted = true;
 }
 
+// Ctrl-C and SIGTERM set the flag this returns, for a command to end cleanly.
+const std::atomic<bool>* catchInterrupts() {
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
+  return &gInterrupted;
+}
+
 // --- Render options shared by `render` and `submit`
 
 struct RenderOptions {
@@ -54,6 +62,8 @@ struct RenderOptions {
   int chains = 64;
   int64_t bootstrapCandidates = 0;
   int64_t flushEvery = 0;
+  double untilError = 0;
+  int errorGroups = 0;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -117,6 +127,20 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "one film's worth (the pixel count, within 4096 .. 2^20). Longer: fewer, "
                    "denser uploads for a coordinator with many workers, and more work lost with "
                    "a worker that dies")
+      ->default_str("0");
+  command
+      ->add_option("--until-error", o->untilError,
+                   "stop once the image's relative MSE, estimated without a reference from the "
+                   "spread between independent groups of chains, is at most this (or at the "
+                   "budget, --spp/--mpp/--time, whichever comes first); 0: render the whole "
+                   "budget")
+      ->default_str("0");
+  command
+      ->add_option("--error-groups", o->errorGroups,
+                   "independent groups of chains whose spread estimates the error without a "
+                   "reference (at most the chain count; erpt: the seeds per pixel); the "
+                   "coordinator keeps a film for each. 1: no estimate, one film; 0: " +
+                       std::to_string(farm::kErrorGroups))
       ->default_str("0");
   o->timeOption = command->add_option(
       "--time", o->time,
@@ -183,6 +207,8 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
   s->numChains = o.chains;
   s->bootstrapSamples = o.bootstrapCandidates;
   s->flushInterval = o.flushEvery;
+  s->untilError = o.untilError;
+  s->errorGroups = o.errorGroups;
   if (!farm::parseMutationMix(o.mutationMix, &s->mutationMix, error)) {
     *error = "--mutation-mix: " + *error;
     return false;
@@ -286,9 +312,7 @@ int runRender(const std::string& scene, const std::string& output, const RenderO
   render.workers = workers;
   ProgressDisplay display;
   render.onProgress = [&](const farm::JobProgress& p) { display.show(p); };
-  render.interrupted = &gInterrupted;
-  std::signal(SIGINT, onInterrupt);
-  std::signal(SIGTERM, onInterrupt);
+  render.interrupted = catchInterrupts();
 
   farm::EmbeddedRenderResult result;
   Status status = farm::renderEmbedded(render, &result);
@@ -367,8 +391,7 @@ int runFetch(const std::string& address, const std::string& job, const std::stri
   if (!checkOutputPath(output, &error)) return fail(error, kUsageError);
   farm::FarmClient client(address);
   if (int rc = connectTo(client)) return rc;
-  std::signal(SIGINT, onInterrupt);
-  std::signal(SIGTERM, onInterrupt);
+  catchInterrupts();
   const auto start = std::chrono::steady_clock::now();
   ProgressDisplay display;
   farm::JobProgress p;
@@ -436,13 +459,62 @@ int runList(const std::string& address) {
   return 0;
 }
 
+int runCompareCommand(const std::string& scene, const std::string& algorithms,
+                      const RenderOptions& options, const std::string& coordinator, int threads,
+                      const std::string& reportDir) {
+  farm::CompareOptions compare;
+  std::string error;
+  if (!toSettings(options, &compare.settings, &error)) return fail(error, kUsageError);
+  if (!farm::parseAlgorithms(algorithms, &compare.algorithms, &error))
+    return fail(error, kUsageError);
+  if (!fs::is_regular_file(scene)) return fail("scene file '" + scene + "' does not exist");
+  if (!options.reference.empty() && !fs::is_regular_file(options.reference))
+    return fail("reference '" + options.reference + "' does not exist");
+  compare.scene = scene;
+  compare.reference = options.reference;
+  compare.reportDir = reportDir;
+  compare.coordinator = coordinator;
+  compare.threads = threads;
+  ProgressDisplay display;
+  std::string current;
+  compare.onProgress = [&](const std::string& name, const farm::JobProgress& p) {
+    if (name != current) {
+      display.finish();
+      std::cerr << "farm compare: " << name << "\n";
+      current = name;
+    }
+    display.show(p);
+  };
+  compare.interrupted = catchInterrupts();
+  farm::CompareResult result;
+  Status s = farm::runCompare(compare, &result);
+  display.finish();
+  if (!s.isOk()) return fail(s.message());
+  for (const farm::ReportEntry& e : result.entries) {
+    std::cout << farm::finalReport(e.progress, scene, options.reference);
+  }
+  if (!result.warning.empty()) std::cerr << "farm: warning: " << result.warning << "\n";
+  std::cout << "  wrote " << (fs::path(reportDir) / "index.html").string() << "\n";
+  return 0;
+}
+
+int runReportCommand(const std::string& coordinator, const std::string& job,
+                     const std::string& reportDir) {
+  farm::CompareResult result;
+  Status s = farm::runJobReport(coordinator, job, reportDir, &result);
+  if (!s.isOk()) return fail(s.message());
+  if (!result.warning.empty()) std::cerr << "farm: warning: " << result.warning << "\n";
+  std::cout << "wrote " << (fs::path(reportDir) / "index.html").string() << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
       "farm: a Metropolis light transport render farm. Render a scene in this process "
-      "(render), or submit it to a farm-coordinator and follow the job (submit, status, "
-      "fetch, cancel, list)."};
+      "(render), compare algorithms on it (compare), or submit it to a farm-coordinator and "
+      "follow the job (submit, status, fetch, report, cancel, list)."};
   app.require_subcommand(1);
   const int hardwareThreads = int(std::max(1u, std::thread::hardware_concurrency()));
 
@@ -468,8 +540,8 @@ int main(int argc, char** argv) {
                    "local workers sharing the threads (the image does not depend on it)")
       ->default_str("1");
   render->add_option("--report", reportDir,
-                     "directory for error_vs_time.csv (elapsed_seconds,samples,rmse,relmse; "
-                     "rows need --reference) and report.json");
+                     "directory for error_vs_time.csv (elapsed_seconds,samples,rmse,relmse,"
+                     "estimated_relmse; rmse and relmse need --reference) and report.json");
 
   // submit
   CLI::App* submit = app.add_subcommand(
@@ -506,6 +578,40 @@ int main(int argc, char** argv) {
   fetch->add_option("--timeout", timeout, "give up after this many seconds (default: wait)")
       ->check(CLI::NonNegativeNumber);
 
+  // compare
+  CLI::App* compare = app.add_subcommand(
+      "compare",
+      "render SCENE with each of --algorithms for the same budget (--time S, or --spp/--mpp), "
+      "one job after another, here or on --coordinator, and write a report directory: per "
+      "algorithm its error_vs_time.csv, report.json and image, one chart of relative MSE "
+      "against seconds (error_vs_time.png and .svg), summary.json and index.html");
+  std::string compareScene, compareAlgorithms = "pt,bdpt,pssmlt,mmlt,mlt,erpt", compareDir,
+                            compareCoordinator;
+  RenderOptions compareOptions;
+  int compareThreads = hardwareThreads;
+  compare->add_option("SCENE", compareScene, "scene file")->required();
+  compare
+      ->add_option("--algorithms", compareAlgorithms,
+                   std::string("comma-separated, from ") + farm::algorithmList())
+      ->default_str(compareAlgorithms);
+  compare->add_option("--report", compareDir, "the report directory")->required();
+  compare->add_option("--coordinator", compareCoordinator,
+                      "HOST:PORT of a farm-coordinator to render on (default: here)");
+  compare->add_option("--threads", compareThreads, "chain threads, rendering here")
+      ->default_str(std::to_string(hardwareThreads));
+  addRenderOptions(compare, &compareOptions);
+  compare->remove_option(compare->get_option("--algorithm"));
+
+  // report
+  CLI::App* report = app.add_subcommand(
+      "report",
+      "write a coordinator job's report directory: its error_vs_time.csv, report.json, image "
+      "(once done), chart and index.html");
+  std::string reportJobDir;
+  report->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  report->add_option("JOB", job, "job id")->required();
+  report->add_option("DIR", reportJobDir, "the report directory")->required();
+
   // cancel, list
   CLI::App* cancel = app.add_subcommand("cancel", "cancel a job");
   cancel->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
@@ -530,6 +636,13 @@ int main(int argc, char** argv) {
       return fail("--workers must be between 1 and 4096", kUsageError);
     return runRender(renderScene, renderOutput, renderOptions, threads, workers, reportDir);
   }
+  if (*compare) {
+    if (compareThreads < 1 || compareThreads > 4096)
+      return fail("--threads must be between 1 and 4096", kUsageError);
+    return runCompareCommand(compareScene, compareAlgorithms, compareOptions, compareCoordinator,
+                             compareThreads, compareDir);
+  }
+  if (*report) return runReportCommand(address, job, reportJobDir);
   if (*submit) return runSubmit(address, submitScene, submitOptions);
   if (*status) return runStatus(address, job, json);
   if (*fetch) return runFetch(address, job, fetchOutput, timeout);

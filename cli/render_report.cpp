@@ -84,6 +84,26 @@ std::string acceptanceLine(const JobProgress& p) {
   return line + "\n";
 }
 
+// The latest sample that measured the error against the reference, or that estimated it.
+static const ErrorSample* latestMeasured(const JobProgress& p) {
+  for (auto it = p.errorSeries.rbegin(); it != p.errorSeries.rend(); ++it)
+    if (it->relMse >= 0) return &*it;
+  return nullptr;
+}
+static const ErrorSample* latestEstimated(const JobProgress& p) {
+  for (auto it = p.errorSeries.rbegin(); it != p.errorSeries.rend(); ++it)
+    if (it->estimatedRelMse >= 0) return &*it;
+  return nullptr;
+}
+
+// A CSV or JSON value that may be absent (< 0).
+static std::string csvValue(double v) {
+  return v < 0 ? std::string() : format("%.9g", v);
+}
+static nlohmann::json jsonValue(double v) {
+  return v < 0 ? nlohmann::json(nullptr) : nlohmann::json(v);
+}
+
 std::string progressLine(const JobProgress& p, int barWidth) {
   std::string line = "[";
   const int filled = int(p.fraction * barWidth);
@@ -93,11 +113,28 @@ std::string progressLine(const JobProgress& p, int barWidth) {
   line += "  " + formatCount(p.samplesPerSecond) + " samples/s";
   line += "  elapsed " + formatDuration(p.elapsedSeconds);
   line += "  ETA " + formatDuration(p.etaSeconds);
-  if (!p.errorSeries.empty()) {
-    const ErrorSample& e = p.errorSeries.back();
-    line += "  rmse " + format("%.4g", e.rmse) + "  relMSE " + format("%.4g", e.relMse);
+  if (const ErrorSample* e = latestMeasured(p)) {
+    line += "  rmse " + format("%.4g", e->rmse) + "  relMSE " + format("%.4g", e->relMse);
+  }
+  if (const ErrorSample* e = latestEstimated(p)) {
+    line += "  est. relMSE " + format("%.3g", e->estimatedRelMse);
   }
   return line;
+}
+
+// The reference-free estimate (common/film/batch_means.h), and the target it stops at.
+static std::string estimateLine(const JobProgress& p) {
+  std::string line;
+  if (const ErrorSample* e = latestEstimated(p)) {
+    line = "  error estimate (from the spread between chain groups, no reference): relMSE " +
+           format("%.4g", e->estimatedRelMse) + " (at " + format("%.1f", e->elapsedSeconds) + " s)";
+  } else if (p.settings.untilError > 0) {
+    line = "  error estimate: not yet (every chain group needs work to show)";
+  }
+  if (!line.empty() && p.settings.untilError > 0) {
+    line += "; stops at " + format("%.4g", p.settings.untilError);
+  }
+  return line.empty() ? line : line + "\n";
 }
 
 std::string statusText(const JobProgress& p) {
@@ -127,13 +164,13 @@ std::string statusText(const JobProgress& p) {
   out << acceptanceLine(p);
   out << rejectedLine(p);
   out << warningLines(p);
-  if (!p.errorSeries.empty()) {
-    const ErrorSample& e = p.errorSeries.back();
-    out << "  error vs reference: rmse " << format("%.6g", e.rmse) << ", relMSE "
-        << format("%.6g", e.relMse) << " (at " << format("%.1f", e.elapsedSeconds) << " s)\n";
+  if (const ErrorSample* e = latestMeasured(p)) {
+    out << "  error vs reference: rmse " << format("%.6g", e->rmse) << ", relMSE "
+        << format("%.6g", e->relMse) << " (at " << format("%.1f", e->elapsedSeconds) << " s)\n";
   } else if (p.hasReference) {
     out << "  error vs reference: not measured yet\n";
   }
+  out << estimateLine(p);
   return out.str();
 }
 
@@ -178,13 +215,13 @@ nlohmann::json progressJson(const JobProgress& p) {
                        {"acceptance", t.proposed > 0 ? double(t.accepted) / t.proposed : 0.0}};
   }
   j["mutations"] = tallies;
-  if (!p.errorSeries.empty()) {
-    j["rmse"] = p.errorSeries.back().rmse;
-    j["relmse"] = p.errorSeries.back().relMse;
-  } else {
-    j["rmse"] = nullptr;
-    j["relmse"] = nullptr;
-  }
+  const ErrorSample* measured = latestMeasured(p);
+  j["rmse"] = measured ? jsonValue(measured->rmse) : nlohmann::json(nullptr);
+  j["relmse"] = measured ? jsonValue(measured->relMse) : nlohmann::json(nullptr);
+  const ErrorSample* estimated = latestEstimated(p);
+  j["estimated_relmse"] =
+      estimated ? jsonValue(estimated->estimatedRelMse) : nlohmann::json(nullptr);
+  j["until_error"] = jsonValue(p.settings.untilError > 0 ? p.settings.untilError : -1);
   return j;
 }
 
@@ -219,16 +256,16 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   out << rejectedLine(p);
   out << acceptanceLine(p);
   out << warningLines(p);
-  if (!p.errorSeries.empty()) {
-    const ErrorSample& e = p.errorSeries.back();
-    out << "  error vs " << referencePath << ": rmse " << format("%.6g", e.rmse) << ", relMSE "
-        << format("%.6g", e.relMse);
-    if (needsBootstrap(s.algorithm) && e.relMse > 0) {
+  if (const ErrorSample* e = latestMeasured(p)) {
+    out << "  error vs " << referencePath << ": rmse " << format("%.6g", e->rmse) << ", relMSE "
+        << format("%.6g", e->relMse);
+    if (needsBootstrap(s.algorithm) && e->relMse > 0) {
       out << " (Z's standard error alone would make about "
-          << format("%.2g", 100 * zError * zError / e.relMse) << "% of it)";
+          << format("%.2g", 100 * zError * zError / e->relMse) << "% of it)";
     }
     out << "\n";
   }
+  out << estimateLine(p);
   return out.str();
 }
 
@@ -244,12 +281,12 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
   }
   const std::string csvPath = (fs::path(dir) / "error_vs_time.csv").string();
   std::ofstream csv(csvPath);
-  csv << "elapsed_seconds,samples,rmse,relmse\n";
-  char row[160];
+  // rmse and relmse against the reference, estimated_relmse from the chain groups' spread;
+  // empty where not measured.
+  csv << "elapsed_seconds,samples,rmse,relmse,estimated_relmse\n";
   for (const ErrorSample& e : p.errorSeries) {
-    std::snprintf(row, sizeof(row), "%.6f,%lld,%.9g,%.9g\n", e.elapsedSeconds, (long long)e.samples,
-                  e.rmse, e.relMse);
-    csv << row;
+    csv << format("%.6f", e.elapsedSeconds) << "," << e.samples << "," << csvValue(e.rmse) << ","
+        << csvValue(e.relMse) << "," << csvValue(e.estimatedRelMse) << "\n";
   }
   csv.close();
   if (!csv) {
@@ -274,6 +311,7 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
       {"flush_interval", p.settings.flushInterval},
       {"num_chains", p.settings.numChains},
       {"large_step_probability", p.settings.largeStepProbability},
+      {"until_error", p.settings.untilError},
   };
   j["bootstrap_share"] = p.elapsedSeconds > 0 ? p.bootstrapSeconds / p.elapsedSeconds : 0.0;
   j["normalization_relative_std_error"] = relativeZError(p);
@@ -282,8 +320,9 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
   for (const ErrorSample& e : p.errorSeries) {
     series.push_back({{"elapsed_seconds", e.elapsedSeconds},
                       {"samples", e.samples},
-                      {"rmse", e.rmse},
-                      {"relmse", e.relMse}});
+                      {"rmse", jsonValue(e.rmse)},
+                      {"relmse", jsonValue(e.relMse)},
+                      {"estimated_relmse", jsonValue(e.estimatedRelMse)}});
   }
   j["error_vs_time"] = series;
   const std::string jsonPath = (fs::path(dir) / "report.json").string();

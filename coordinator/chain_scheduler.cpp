@@ -1,6 +1,8 @@
 #include "coordinator/chain_scheduler.h"
 
 #include <algorithm>
+#include <map>
+#include <optional>
 #include <stdexcept>
 
 namespace farm {
@@ -58,8 +60,35 @@ std::vector<ChainLease> ChainScheduler::lease(const std::string& worker, int max
   std::stable_sort(waiting.begin(), waiting.end(), [&](uint32_t a, uint32_t b) {
     return chains_[a].mutationsDone < chains_[b].mutationsDone;
   });
-  for (uint32_t index : waiting) {
-    if (int(leases.size()) >= max) break;
+  // Whole error groups to one worker where it can take them (its chains then go up in one
+  // batch), and the group least served to the next ask: running chains first, then work done.
+  // One worker of few threads so cycles through the groups, and every group has work to show
+  // for the error estimate early in the job, not only once the groups before it are done.
+  std::vector<uint32_t> order;
+  order.reserve(waiting.size());
+  std::vector<bool> taken(waiting.size(), false);
+  std::map<uint32_t, std::pair<int64_t, int64_t>> served;  // group -> (running, work)
+  for (const Chain& c : chains_) {
+    auto& s = served[c.spec.errorGroup];
+    s.first += c.state == State::kLeased;
+    s.second += c.mutationsDone;
+  }
+  while (order.size() < waiting.size() && int(order.size()) < max) {
+    std::optional<uint32_t> group;
+    for (size_t k = 0; k < waiting.size(); ++k) {
+      const uint32_t g = chains_[waiting[k]].spec.errorGroup;
+      if (!taken[k] &&
+          (!group || served[g] < served[*group] || (served[g] == served[*group] && g < *group)))
+        group = g;
+    }
+    for (size_t k = 0; k < waiting.size() && int(order.size()) < max; ++k) {
+      if (taken[k] || chains_[waiting[k]].spec.errorGroup != *group) continue;
+      taken[k] = true;
+      order.push_back(waiting[k]);
+      ++served[*group].first;
+    }
+  }
+  for (uint32_t index : order) {
     Chain& chain = chains_[index];
     chain.state = State::kLeased;
     chain.holder = worker;

@@ -107,6 +107,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
     s->set_samples(e.samples);
     s->set_rmse(e.rmse);
     s->set_relmse(e.relMse);
+    s->set_estimated_relmse(e.estimatedRelMse);
   }
   m->set_error_series_total(p.errorSeriesTotal);
   m->set_rejected_splats(p.rejected.total());

@@ -50,10 +50,14 @@ struct JobSpec {
   std::string bundleRoot;       // stripped from loader messages so they name bundle paths
 };
 
+// The image's error at one flush: against the reference (rmse, relMse; -1 without one) and
+// estimated from the spread between the chains' groups (estimatedRelMse; -1 where the job has
+// one group), common/film/batch_means.h.
 struct ErrorSample {
   double elapsedSeconds = 0;
   int64_t samples = 0;
-  double rmse = 0, relMse = 0;
+  double rmse = -1, relMse = -1;
+  double estimatedRelMse = -1;
 };
 
 struct JobProgress {

@@ -23,7 +23,9 @@ namespace {
 
 // The schema's version in meta('schema'): a database of another version is refused, not guessed.
 // 2: flush records live in DIR/logs/<job>.log; the flushes table holds where.
-constexpr int64_t kSchemaVersion = 2;
+// 3: errors.estimated, the error estimated without a reference (a version-2 database is
+//    brought to 3 on opening: its jobs have one error group and no estimate).
+constexpr int64_t kSchemaVersion = 3;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);
@@ -45,7 +47,8 @@ CREATE TABLE IF NOT EXISTS flushes(
   PRIMARY KEY(job, seq));
 CREATE TABLE IF NOT EXISTS errors(
   job TEXT NOT NULL, idx INTEGER NOT NULL, elapsed REAL NOT NULL, samples INTEGER NOT NULL,
-  rmse REAL NOT NULL, relmse REAL NOT NULL, PRIMARY KEY(job, idx));
+  rmse REAL NOT NULL, relmse REAL NOT NULL, estimated REAL NOT NULL DEFAULT -1,
+  PRIMARY KEY(job, idx));
 )sql";
 
 // One prepared statement; finalized on every path out.
@@ -338,6 +341,7 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
   r.set_rejected_negative(s.rejected.negative);
   r.set_rays(s.rays);
   r.set_accepted_flushes(s.acceptedFlushes);
+  for (int64_t w : s.groupWork) r.add_group_work(w);
   for (const MutationTally& t : s.tallies) toRecord(t, r.add_tallies());
   for (size_t i = 0; i < chains.size(); ++i) {
     store::v1::ChainRecord* c = r.add_chains();
@@ -349,8 +353,8 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
   return r.SerializeAsString();
 }
 
-// `values` is the film's size (width*height*3), or 0 for the counts a finished job keeps; the
-// film is read from `logDir`/sums_file. *sumsFile: the file the record names ("" for none).
+// `values` is the films' size (groups*width*height*3), or 0 for the counts a finished job keeps;
+// the films are read from `logDir`/sums_file. *sumsFile: the file the record names ("" for none).
 bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string& logDir,
                       SplatAggregator::Snapshot* s,
                       std::vector<ChainScheduler::ChainSnapshot>* chains, std::string* sumsFile,
@@ -390,6 +394,7 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string
   s->rejected.negative = r.rejected_negative();
   s->rays = r.rays();
   s->acceptedFlushes = r.accepted_flushes();
+  s->groupWork.assign(r.group_work().begin(), r.group_work().end());
   for (const v1::MutationTally& t : r.tallies()) s->tallies.push_back(fromRecord(t));
   for (const store::v1::ChainRecord& c : r.chains()) {
     chains->push_back({c.resume_state(), c.mutations_done(), c.next_flush_index(), c.finished()});
@@ -517,6 +522,12 @@ Status JobStore::open(const std::string& dir, std::unique_ptr<JobStore>* store) 
                    "ON CONFLICT(key) DO UPDATE SET value = value + 1 RETURNING value");
     if (!version.bind(1, kSchemaVersion).run() || read.step() != SQLITE_ROW) return false;
     schema = read.integer(0);
+    if (schema == 2) {
+      Statement column(db, "ALTER TABLE errors ADD COLUMN estimated REAL NOT NULL DEFAULT -1");
+      Statement mark(db, "UPDATE meta SET value = 3 WHERE key = 'schema'");
+      if (!column.run() || !mark.run()) return false;
+      schema = 3;
+    }
     if (schema != kSchemaVersion) return false;
     if (bump.step() != SQLITE_ROW) return false;
     s->generation_ = uint64_t(bump.integer(0));
@@ -747,14 +758,15 @@ Status JobStore::writeDurably(const std::string& path, const std::string& bytes)
 Status JobStore::addErrorSample(const std::string& id, uint32_t index, const ErrorSample& e) {
   std::lock_guard<std::mutex> lock(mutex_);
   Statement q(db_,
-              "INSERT OR REPLACE INTO errors(job, idx, elapsed, samples, rmse, relmse) "
-              "VALUES(?, ?, ?, ?, ?, ?)");
+              "INSERT OR REPLACE INTO errors(job, idx, elapsed, samples, rmse, relmse, "
+              "estimated) VALUES(?, ?, ?, ?, ?, ?, ?)");
   if (!q.bind(1, id)
            .bind(2, int64_t(index))
            .bind(3, e.elapsedSeconds)
            .bind(4, e.samples)
            .bind(5, e.rmse)
            .bind(6, e.relMse)
+           .bind(7, e.estimatedRelMse)
            .run()) {
     return fail("cannot record an error sample of job " + id);
   }
@@ -787,9 +799,11 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
     }
     if (job.phase == JobPhase::kRendering && !job.plan) return corrupt("rendering without a plan");
     if (!q.isNull(6)) {
-      const size_t values = job.phase == JobPhase::kRendering
-                                ? size_t(job.plan->width) * size_t(job.plan->height) * 3
-                                : 0;
+      const size_t values =
+          job.phase == JobPhase::kRendering
+              ? size_t(SplatAggregator::groupCount(errorGroupsOf(job.plan->chains))) *
+                    size_t(job.plan->width) * size_t(job.plan->height) * 3
+              : 0;
       SplatAggregator::Snapshot snapshot;
       std::string sumsFile;
       if (!decodeCheckpoint(q.bytes(6), values, logDir_, &snapshot, &job.checkpointChains,
@@ -824,13 +838,13 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
       if (trc != SQLITE_DONE) return fail("cannot read the flushes of job " + job.id);
     }
     Statement errors(db_,
-                     "SELECT elapsed, samples, rmse, relmse FROM errors WHERE job = ? "
+                     "SELECT elapsed, samples, rmse, relmse, estimated FROM errors WHERE job = ? "
                      "ORDER BY idx");
     errors.bind(1, job.id);
     int erc;
     while ((erc = errors.step()) == SQLITE_ROW) {
       job.errorSeries.push_back(
-          {errors.real(0), errors.integer(1), errors.real(2), errors.real(3)});
+          {errors.real(0), errors.integer(1), errors.real(2), errors.real(3), errors.real(4)});
     }
     if (erc != SQLITE_DONE) return fail("cannot read the error series of job " + job.id);
     jobs->push_back(std::move(job));

@@ -6,32 +6,75 @@
 
 namespace farm {
 
-SplatAggregator::SplatAggregator(int width, int height, uint32_t numChains)
-    : width_(width),
-      height_(height),
-      sums_(size_t(width) * size_t(height) * 3, 0.0),
-      nextFlush_(numChains, 0) {}
+uint32_t SplatAggregator::groupCount(const std::vector<uint32_t>& chainGroups) {
+  uint32_t groups = 1;
+  for (uint32_t g : chainGroups) groups = std::max(groups, g + 1);
+  return groups;
+}
 
-SplatAggregator::SplatAggregator(int width, int height, Snapshot snapshot)
+SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> chainGroups)
     : width_(width),
       height_(height),
-      sums_(std::move(snapshot.sums)),
+      chainGroup_(std::move(chainGroups)),
+      groupSums_(groupCount(chainGroup_), std::vector<double>(filmValues(), 0.0)),
+      groupWork_(groupSums_.size(), 0),
+      nextFlush_(chainGroup_.size(), 0) {}
+
+SplatAggregator::SplatAggregator(int width, int height, uint32_t numChains)
+    : SplatAggregator(width, height, std::vector<uint32_t>(numChains, 0)) {}
+
+SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> chainGroups,
+                                 Snapshot snapshot)
+    : width_(width),
+      height_(height),
+      chainGroup_(std::move(chainGroups)),
       nextFlush_(std::move(snapshot.nextFlush)),
       workDone_(snapshot.workDone),
       rejected_(snapshot.rejected),
       rays_(snapshot.rays),
       acceptedFlushes_(snapshot.acceptedFlushes),
       tallies_(std::move(snapshot.tallies)) {
-  if (sums_.size() != size_t(width) * size_t(height) * 3) {
-    throw std::invalid_argument("the snapshot's film holds " + std::to_string(sums_.size()) +
-                                " values, not " + std::to_string(width) + "x" +
-                                std::to_string(height) + "x3");
+  const size_t groups = groupCount(chainGroup_), values = filmValues();
+  if (snapshot.sums.size() != groups * values) {
+    throw std::invalid_argument("the snapshot's film holds " +
+                                std::to_string(snapshot.sums.size()) + " values, not " +
+                                std::to_string(groups) + " group(s) of " + std::to_string(width) +
+                                "x" + std::to_string(height) + "x3");
   }
+  if (nextFlush_.empty()) nextFlush_.assign(chainGroup_.size(), 0);  // an ended job's counts
+  if (nextFlush_.size() != chainGroup_.size()) {
+    throw std::invalid_argument("the snapshot has " + std::to_string(nextFlush_.size()) +
+                                " chains, not " + std::to_string(chainGroup_.size()));
+  }
+  if (snapshot.groupWork.empty() && groups == 1) snapshot.groupWork = {workDone_};
+  if (snapshot.groupWork.size() != groups) {
+    throw std::invalid_argument("the snapshot counts the work of " +
+                                std::to_string(snapshot.groupWork.size()) + " group(s), not " +
+                                std::to_string(groups));
+  }
+  groupWork_ = std::move(snapshot.groupWork);
+  for (size_t g = 0; g < groups; ++g) {
+    groupSums_.emplace_back(snapshot.sums.begin() + std::ptrdiff_t(g * values),
+                            snapshot.sums.begin() + std::ptrdiff_t((g + 1) * values));
+  }
+}
+
+std::vector<double> SplatAggregator::sums() const {
+  std::vector<double> total = groupSums_.front();
+  for (size_t g = 1; g < groupSums_.size(); ++g) {
+    for (size_t i = 0; i < total.size(); ++i) total[i] += groupSums_[g][i];
+  }
+  return total;
 }
 
 SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
   Snapshot s;
-  if (withSums) s.sums = sums_;
+  if (withSums) {
+    s.sums.reserve(groupSums_.size() * filmValues());
+    for (const std::vector<double>& film : groupSums_)
+      s.sums.insert(s.sums.end(), film.begin(), film.end());
+  }
+  s.groupWork = groupWork_;
   s.nextFlush = nextFlush_;
   s.workDone = workDone_;
   s.rejected = rejected_;
@@ -44,7 +87,8 @@ SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
 FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem) {
   const FlushOutcome outcome = check(flush, problem);
   if (outcome != FlushOutcome::kAccepted) return outcome;
-  for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(flush.splats[i]);
+  std::vector<double>& sums = groupSums_[chainGroup_[flush.chainIndex]];
+  for (size_t i = 0; i < sums.size(); ++i) sums[i] += double(flush.splats[i]);
   countFlush(flush);
   return FlushOutcome::kAccepted;
 }
@@ -65,15 +109,37 @@ FlushOutcome SplatAggregator::addBatch(const FlushBatch& batch, std::string* pro
     if (problem) *problem = "the batch holds no flush";
     return FlushOutcome::kBadValues;
   }
+  const FlushOutcome groups = checkGroups(batch, problem);
+  if (groups != FlushOutcome::kAccepted) return groups;
+  const uint32_t group = chainGroup_[batch.entries.front().chainIndex];
   const FlushOutcome film = checkFilm(batch.film, "the batch's film", problem);
   if (film != FlushOutcome::kAccepted) return film;
-  for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(batch.film.splats[i]);
+  std::vector<double>& sums = groupSums_[group];
+  for (size_t i = 0; i < sums.size(); ++i) sums[i] += double(batch.film.splats[i]);
   for (const ChainFlush& entry : batch.entries) countFlush(entry);
+  return FlushOutcome::kAccepted;
+}
+
+FlushOutcome SplatAggregator::checkGroups(const FlushBatch& batch, std::string* problem) const {
+  const ChainFlush* first = nullptr;
+  for (const ChainFlush& entry : batch.entries) {
+    if (entry.chainIndex >= chainGroup_.size()) continue;  // checkEntry's to answer
+    if (!first) first = &entry;
+    const uint32_t a = chainGroup_[first->chainIndex], b = chainGroup_[entry.chainIndex];
+    if (a != b) {
+      if (problem)
+        *problem = "the batch sums chains of error groups " + std::to_string(a) + " and " +
+                   std::to_string(b) + " (chains " + std::to_string(first->chainIndex) + " and " +
+                   std::to_string(entry.chainIndex) + ") into one film";
+      return FlushOutcome::kBadValues;
+    }
+  }
   return FlushOutcome::kAccepted;
 }
 
 void SplatAggregator::countFlush(const ChainFlush& flush) {
   workDone_ += flush.mutations;
+  groupWork_[chainGroup_[flush.chainIndex]] += flush.mutations;
   rejected_ += flush.rejected;
   rays_ += flush.rays;
   for (const MutationTally& t : flush.tallies) {
@@ -143,11 +209,11 @@ FlushOutcome SplatAggregator::checkFilm(const ChainFlush& flush, const std::stri
                                         std::string* problem) const {
   std::string ignored;
   std::string& why = problem ? *problem : ignored;
-  if (flush.width != width_ || flush.height != height_ || flush.splats.size() != sums_.size()) {
+  if (flush.width != width_ || flush.height != height_ || flush.splats.size() != filmValues()) {
     why = name + " is " + std::to_string(flush.width) + "x" + std::to_string(flush.height) +
           " with " + std::to_string(flush.splats.size()) + " values; the film is " +
           std::to_string(width_) + "x" + std::to_string(height_) + " (" +
-          std::to_string(sums_.size()) + " values)";
+          std::to_string(filmValues()) + " values)";
     return FlushOutcome::kWrongSize;
   }
   size_t nonFinite = 0;

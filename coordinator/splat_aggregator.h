@@ -1,7 +1,9 @@
 #pragma once
 // Sums the chains' splat flushes in double precision, accepting each (chain, flush index)
 // exactly once and in order: a retried upload or a flush from a worker whose lease moved on is a
-// duplicate and changes nothing (DESIGN.md, "The work unit").
+// duplicate and changes nothing (DESIGN.md, "The work unit"). Each error group of chains
+// (ChainSpec::errorGroup) is summed apart, so that the spread between the groups' images
+// estimates the image's error (common/film/batch_means.h); the image is their sum.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -22,7 +24,8 @@ enum class FlushOutcome {
 // A worker's upload of several chains' flushes of one job in one (issue 8, part 4): `film`
 // carries the entries' splats summed (and the film's size; its other fields are unused), each
 // entry one chain's counts, state and flush index (its splats empty), under the lease epoch
-// beside it. The aggregator takes a batch whole or not at all: the film cannot be split.
+// beside it. The aggregator takes a batch whole or not at all: the film cannot be split, and so
+// its chains must be of one error group.
 struct FlushBatch {
   ChainFlush film;
   std::vector<ChainFlush> entries;
@@ -37,7 +40,8 @@ class SplatAggregator {
   // Everything the aggregator has summed: what a durable coordinator checkpoints
   // (coordinator/job_store.h) and restores from.
   struct Snapshot {
-    std::vector<double> sums;
+    std::vector<double> sums;         // the groups' films, one after another
+    std::vector<int64_t> groupWork;   // per group (empty: one group, workDone)
     std::vector<uint32_t> nextFlush;  // per chain
     int64_t workDone = 0;
     InvalidSplats rejected;
@@ -46,9 +50,14 @@ class SplatAggregator {
     std::vector<MutationTally> tallies;
   };
 
+  // chainGroups: each chain's error group (0 .. groups - 1).
+  SplatAggregator(int width, int height, std::vector<uint32_t> chainGroups);
+  // numChains chains in one group.
   SplatAggregator(int width, int height, uint32_t numChains);
-  // Continues from a snapshot of an aggregator of the same film and chain count.
-  SplatAggregator(int width, int height, Snapshot snapshot);
+  // Continues from a snapshot of an aggregator of the same film, chains and groups.
+  SplatAggregator(int width, int height, std::vector<uint32_t> chainGroups, Snapshot snapshot);
+  // How many groups chainGroups names (1 + the largest; 1 when empty).
+  static uint32_t groupCount(const std::vector<uint32_t>& chainGroups);
 
   // What add() would answer, changing nothing: a durable coordinator records a flush between
   // check() and add(), so that a flush it could not record is not summed either.
@@ -57,6 +66,8 @@ class SplatAggregator {
   FlushOutcome checkEntry(const ChainFlush& flush, std::string* problem = nullptr) const;
   FlushOutcome checkFilm(const ChainFlush& flush, const std::string& name,
                          std::string* problem = nullptr) const;
+  // kBadValues when the batch's entries (of chains that exist) are of more than one error group.
+  FlushOutcome checkGroups(const FlushBatch& batch, std::string* problem = nullptr) const;
   // Adds the flush's splats if it is the next one of its chain; *problem says why not.
   FlushOutcome add(const ChainFlush& flush, std::string* problem = nullptr);
   // Adds the batch's film once and every entry's counts, if every entry is the next flush of
@@ -66,8 +77,11 @@ class SplatAggregator {
   // withSums false: the counts alone (what an ended job keeps), without copying the film.
   Snapshot snapshot(bool withSums = true) const;
 
-  // The summed splats (width*height*3), for RenderJob::resolve.
-  const std::vector<double>& sums() const { return sums_; }
+  // The summed splats (width*height*3), for RenderJob::resolve: the groups' sum.
+  std::vector<double> sums() const;
+  uint32_t groups() const { return uint32_t(groupSums_.size()); }
+  const std::vector<double>& groupSums(uint32_t group) const { return groupSums_.at(group); }
+  int64_t groupWork(uint32_t group) const { return groupWork_.at(group); }
   int64_t workDone() const { return workDone_; }
   const InvalidSplats& rejected() const { return rejected_; }
   int64_t rays() const { return rays_; }
@@ -82,8 +96,12 @@ class SplatAggregator {
  private:
   void countFlush(const ChainFlush& flush);  // a checked flush's counts; its chain moves on
 
+  size_t filmValues() const { return size_t(width_) * size_t(height_) * 3; }
+
   int width_, height_;
-  std::vector<double> sums_;
+  std::vector<uint32_t> chainGroup_;
+  std::vector<std::vector<double>> groupSums_;
+  std::vector<int64_t> groupWork_;
   std::vector<uint32_t> nextFlush_;
   int64_t workDone_ = 0;
   InvalidSplats rejected_;

@@ -83,6 +83,8 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_flush_interval(settings.flushInterval);
   m.set_medium_samples(settings.mediumSamples);
   m.set_medium_march_steps(settings.mediumMarchSteps);
+  m.set_until_error(settings.untilError);
+  m.set_error_groups(settings.errorGroups);
   return m;
 }
 
@@ -105,6 +107,8 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.flushInterval = m.flush_interval();
   if (m.medium_samples() != 0) s.mediumSamples = m.medium_samples();
   s.mediumMarchSteps = m.medium_march_steps();
+  s.untilError = m.until_error();
+  s.errorGroups = m.error_groups();
   *out = s;
   return true;
 }
@@ -136,6 +140,7 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_erpt_deposit(spec.erptDeposit);
   m.set_medium_samples(spec.mediumSamples);
   m.set_medium_march_steps(spec.mediumMarchSteps);
+  m.set_error_group(spec.errorGroup);
   return m;
 }
 
@@ -166,6 +171,7 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   s.erptDeposit = m.erpt_deposit();
   s.mediumSamples = m.medium_samples();
   s.mediumMarchSteps = m.medium_march_steps();
+  s.errorGroup = m.error_group();
   if (s.flushInterval <= 0) {
     *error = "chain " + std::to_string(s.chainIndex) + " has flush interval " +
              std::to_string(s.flushInterval) + " (must be > 0)";

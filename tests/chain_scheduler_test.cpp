@@ -119,5 +119,41 @@ TEST(ChainScheduler, YieldedChainsTakeTurnsLeastWorkFirst) {
   EXPECT_EQ(next[0].spec.resumeFlushIndex, 1u);
 }
 
+TEST(ChainScheduler, AWorkerGetsWholeGroupsAndTheLeastServedGroupFirst) {
+  // Eight chains in four error groups of two (as planned: contiguous).
+  std::vector<ChainSpec> chains = plan(8);
+  for (ChainSpec& c : chains) c.errorGroup = c.chainIndex / 2;
+  auto groupsOf = [](const std::vector<ChainLease>& leases) {
+    std::vector<uint32_t> g;
+    for (const ChainLease& l : leases) g.push_back(l.spec.errorGroup);
+    return g;
+  };
+  const auto t0 = SteadyClock::time_point{} + seconds(1000);
+  {
+    // A worker of few threads, one chain at a time: every group has a chain running before
+    // any group has two, so that every group has work to show early.
+    ChainScheduler scheduler(chains, seconds(10));
+    std::vector<uint32_t> order;
+    for (int i = 0; i < 4; ++i) {
+      auto one = scheduler.lease("a", 1, t0);
+      ASSERT_EQ(one.size(), 1u);
+      order.push_back(one[0].spec.errorGroup);
+    }
+    EXPECT_EQ(order, (std::vector<uint32_t>{0, 1, 2, 3}));
+    // A chain of group 1 ends: group 1 is now the least served.
+    scheduler.finishChain(2);
+    auto next = scheduler.lease("a", 1, t0);
+    ASSERT_EQ(next.size(), 1u);
+    EXPECT_EQ(next[0].spec.errorGroup, 1u);
+  }
+  {
+    // Workers that take a group or more at once get whole groups: their chains batch.
+    ChainScheduler scheduler(chains, seconds(10));
+    EXPECT_EQ(groupsOf(scheduler.lease("a", 2, t0)), (std::vector<uint32_t>{0, 0}));
+    EXPECT_EQ(groupsOf(scheduler.lease("b", 4, t0)), (std::vector<uint32_t>{1, 1, 2, 2}));
+    EXPECT_EQ(groupsOf(scheduler.lease("c", 4, t0)), (std::vector<uint32_t>{3, 3}));
+  }
+}
+
 }  // namespace
 }  // namespace farm

@@ -3,6 +3,7 @@
 // the image of an uninterrupted run (DESIGN.md: a dead worker costs at most one flush interval,
 // and failures do not change the image).
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <thread>
 
 #include "coordinator/coordinator.h"
+#include "coordinator/job_store.h"
 #include "tests/test_support.h"
 
 namespace farm {
@@ -487,6 +489,58 @@ TEST(CoordinatorCore, FailedSceneKeepsItsMessage) {
   spec.settings = smallJob(Algorithm::PathTracing);
   spec.scenePath = scratch / "missing.xml";
   EXPECT_EQ(coordinator.submit(spec, &id).code(), StatusCode::kInvalidArgument);
+}
+
+// A database of the previous schema (2: no reference-free error estimate) is brought to 3 on
+// opening, its error samples kept and marked as without an estimate; one of an unknown version
+// is refused, not guessed.
+TEST(JobStoreSchema, AVersionTwoDatabaseIsBroughtToThree) {
+  testing::ScratchDir scratch("schema");
+  {
+    std::unique_ptr<JobStore> store;
+    ASSERT_TRUE(JobStore::open(scratch.path(), &store).isOk());
+  }
+  const std::string path = scratch / "coordinator.db";
+  auto exec = [&](const std::string& sql) {
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    char* message = nullptr;
+    const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+    EXPECT_EQ(rc, SQLITE_OK) << sql << ": " << (message ? message : "");
+    sqlite3_free(message);
+    sqlite3_close(db);
+  };
+  auto query = [&](const std::string& sql) {
+    sqlite3* db = nullptr;
+    sqlite3_open(path.c_str(), &db);
+    sqlite3_stmt* q = nullptr;
+    double value = -99;
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &q, nullptr) == SQLITE_OK &&
+        sqlite3_step(q) == SQLITE_ROW)
+      value = sqlite3_column_double(q, 0);
+    sqlite3_finalize(q);
+    sqlite3_close(db);
+    return value;
+  };
+  exec(
+      "ALTER TABLE errors DROP COLUMN estimated; UPDATE meta SET value = 2 WHERE key = 'schema';"
+      "INSERT INTO errors(job, idx, elapsed, samples, rmse, relmse) VALUES('j', 0, 1, 2, 3, 4)");
+  {
+    std::unique_ptr<JobStore> store;
+    Status opened = JobStore::open(scratch.path(), &store);
+    ASSERT_TRUE(opened.isOk()) << opened.message();
+  }
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key = 'schema'"), 3);
+  EXPECT_EQ(query("SELECT estimated FROM errors WHERE job = 'j'"), -1);
+  EXPECT_EQ(query("SELECT relmse FROM errors WHERE job = 'j'"), 4);
+
+  exec("UPDATE meta SET value = 1 WHERE key = 'schema'");
+  std::unique_ptr<JobStore> store;
+  Status refused = JobStore::open(scratch.path(), &store);
+  EXPECT_FALSE(refused.isOk());
+  EXPECT_NE(refused.message().find("has schema version 1; this coordinator reads 3"),
+            std::string::npos)
+      << refused.message();
 }
 
 }  // namespace

@@ -200,5 +200,49 @@ TEST(EmbeddedRender, SceneWarningsReachTheReport) {
       << statusText(result.progress);
 }
 
+// --until-error: the job stops once the error estimated from its chain groups is there,
+// long before its budget, and says so; the report's CSV carries the estimate with no reference.
+TEST(EmbeddedRender, UntilErrorStopsOnceTheEstimateIsThere) {
+  EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 2, 1);
+  o.settings.width = o.settings.height = 64;
+  o.settings.mutationsPerPixel = 1024;  // about 18 s on two threads; 0.001 comes at about 4
+  o.settings.bootstrapSamples = 0;
+  o.settings.untilError = 1e-3;
+  EmbeddedRenderResult result;
+  Status s = renderEmbedded(o, &result);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  const JobProgress& p = result.progress;
+  EXPECT_EQ(p.phase, JobPhase::kDone);
+  EXPECT_LT(p.workDone, p.plannedWork / 2) << "it ran (almost) its whole budget";
+  ASSERT_FALSE(p.errorSeries.empty());
+  EXPECT_LT(p.errorSeries.back().estimatedRelMse, 1e-3);
+  EXPECT_LT(p.errorSeries.back().relMse, 0) << "no reference, no measured error";
+  // It stopped at the first estimate within the target, give or take the flushes under way.
+  size_t reached = p.errorSeries.size();
+  for (size_t i = 0; i < p.errorSeries.size() && reached == p.errorSeries.size(); ++i)
+    if (p.errorSeries[i].estimatedRelMse <= 1e-3) reached = i;
+  ASSERT_LT(reached, p.errorSeries.size());
+  EXPECT_LT(p.workDone, p.errorSeries[reached].samples * 5 / 4);
+  EXPECT_NE(statusText(p).find("stops at 0.001"), std::string::npos) << statusText(p);
+
+  const std::string dir = ::testing::TempDir() + "/until-error-report";
+  std::string error;
+  ASSERT_TRUE(writeReportDir(dir, p, o.scenePath, "out.exr", "", &error)) << error;
+  std::ifstream csv(dir + "/error_vs_time.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "elapsed_seconds,samples,rmse,relmse,estimated_relmse");
+  ASSERT_TRUE(std::getline(csv, row));
+  EXPECT_NE(row.find(",,,"), std::string::npos) << "empty reference columns: " << row;
+
+  // What it cannot do, said before anything runs.
+  RenderSettings bad = o.settings;
+  bad.untilError = -1;
+  EXPECT_NE(bad.validate().find("--until-error must be a relative MSE >= 0"), std::string::npos);
+  bad.untilError = 1e-3;
+  bad.errorGroups = 1;
+  EXPECT_NE(bad.validate().find("--until-error needs an error estimate"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace farm

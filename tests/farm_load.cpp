@@ -66,6 +66,7 @@ struct SimChain {
   uint32_t chain = 0;
   uint64_t epoch = 0;
   uint32_t nextFlush = 0;
+  uint32_t group = 0;  // its error group: a batch holds one group's chains
 };
 
 // A real flush, encoded once; every simulated chain sends it as its own.
@@ -298,7 +299,8 @@ int run(const Options& o) {
       return 1;
     }
     for (const v1::ChainLease& lease : leases.leases()) {
-      chains.push_back({reg.worker_id(), lease.spec().chain_index(), lease.epoch(), 0});
+      chains.push_back({reg.worker_id(), lease.spec().chain_index(), lease.epoch(), 0,
+                        lease.spec().error_group()});
       if (int(specs.size()) < o.samples) {
         ChainSpec spec;
         if (!fromProto(lease.spec(), &spec, &error) ||
@@ -355,10 +357,13 @@ int run(const Options& o) {
     batchFilm.flush.splats.assign(sum.begin(), sum.end());
     batchFilm.splats = encodeSplats(batchFilm.flush.splats);
   }
-  // What one upload carries: a chain, or (--batch) all of a simulated worker's.
+  // What one upload carries: a chain, or (--batch) all of a simulated worker's of one error
+  // group.
   std::vector<std::vector<SimChain*>> units;
   for (SimChain& c : chains) {
-    if (!o.batch || units.empty() || units.back().front()->worker != c.worker) units.emplace_back();
+    if (!o.batch || units.empty() || units.back().front()->worker != c.worker ||
+        units.back().front()->group != c.group)
+      units.emplace_back();
     units.back().push_back(&c);
   }
 
@@ -373,8 +378,17 @@ int run(const Options& o) {
   std::vector<std::thread> threads;
   for (int k = 0; k < connections; ++k) {
     threads.emplace_back([&, k] {
-      auto stub = v1::WorkerApi::NewStub(channel(address));
+      // Connected before the load, as a worker is before it flushes: a first connect that
+      // fails on a busy machine would otherwise fail this connection's uploads fast (gRPC's
+      // reconnect backoff) and count them as refusals.
+      std::shared_ptr<grpc::Channel> ch = channel(address);
       Tally& t = tallies[size_t(k)];
+      if (!ch->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(20))) {
+        t.firstError = "connection " + std::to_string(k) + " could not connect in 20 s";
+        ++t.refused;
+        return;
+      }
+      auto stub = v1::WorkerApi::NewStub(ch);
       std::vector<std::vector<SimChain*>*> mine;
       for (size_t i = size_t(k); i < units.size(); i += size_t(connections)) {
         mine.push_back(&units[i]);

@@ -20,7 +20,8 @@ using std::chrono::milliseconds;
 
 const std::string kScene = std::string(FARM_SHARED_DIR) + "/scenes/cornell-box/scene.xml";
 
-// 32x32 at 32 samples per pixel over two chains: four flushes of 4096 samples each.
+// 32x32 at 32 samples per pixel over two chains of one error group (a batch holds one group's
+// chains): four flushes of 4096 samples each.
 RenderSettings twoChains() {
   RenderSettings s;
   s.algorithm = Algorithm::PathTracing;
@@ -28,6 +29,7 @@ RenderSettings twoChains() {
   s.height = 32;
   s.samplesPerPixel = 32;
   s.numChains = 2;
+  s.errorGroups = 1;
   s.seed = 3;
   return s;
 }
@@ -229,6 +231,44 @@ TEST_P(BatchedFlushes, CountOnceWholeOrNotAtAll) {
   EXPECT_TRUE(acks[0].stop);
 }
 
+// Each error group is summed apart (its film is one of the groups whose spread estimates the
+// error), so a batch of two groups' chains cannot be taken: it is refused whole, nothing counts.
+TEST(BatchedFlushes, ABatchOfTwoErrorGroupsIsRefused) {
+  CoordinatorOptions options;
+  testing::ScratchDir scratch("batch-groups");
+  options.dataDir = scratch.path();
+  Coordinator coordinator(options);
+  JobSpec spec;
+  spec.settings = twoChains();
+  spec.settings.errorGroups = 2;
+  spec.scenePath = kScene;
+  std::string job;
+  ASSERT_TRUE(coordinator.submit(spec, &job).isOk());
+  for (int i = 0; i < 1200 && !coordinator.renderJob(job); ++i)
+    std::this_thread::sleep_for(milliseconds(50));
+  const std::string worker = registerWorker(coordinator);
+  std::vector<WorkerLease> leases;
+  ASSERT_TRUE(coordinator.leaseChains(worker, 2, &leases).isOk());
+  ASSERT_EQ(leases.size(), 2u);
+  EXPECT_NE(leases[0].lease.spec.errorGroup, leases[1].lease.spec.errorGroup);
+  const auto flushes = renderFlushes(coordinator, leases);
+  std::vector<FlushAck> acks;
+  const Status refused = coordinator.acceptBatch(
+      worker, job, batchOf({&flushes[0][0], &flushes[1][0]}, leases[0].lease.epoch), &acks);
+  EXPECT_EQ(refused.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.message().find("error groups 0 and 1"), std::string::npos) << refused.message();
+  EXPECT_EQ(workDone(coordinator, job), 0);
+  // Each on its own counts.
+  for (int c = 0; c < 2; ++c) {
+    ASSERT_TRUE(
+        coordinator
+            .acceptBatch(worker, job, batchOf({&flushes[c][0]}, leases[0].lease.epoch), &acks)
+            .isOk());
+    EXPECT_EQ(acks[0].result, FlushAck::Result::kAccepted);
+  }
+  EXPECT_EQ(workDone(coordinator, job), 2 * 4096);
+}
+
 INSTANTIATE_TEST_SUITE_P(Store, BatchedFlushes, ::testing::Values(false, true),
                          [](const auto& info) { return info.param ? "durable" : "in_memory"; });
 
@@ -281,7 +321,7 @@ TEST(FlushBatcher, SendsOneBatchOnceEveryChainOfTheJobHasFlushed) {
   recorder.answer = [](const BatchItem&, int) { return accepted(); };
   FlushBatcher batcher(60, [&](const std::vector<BatchItem*>& items) { return recorder(items); });
   const LeasedChain a = chainOf("job-a", 0), b = chainOf("job-a", 1), c = chainOf("job-a", 2);
-  for (int i = 0; i < 3; ++i) batcher.chainStarted("job-a");
+  for (int i = 0; i < 3; ++i) batcher.chainStarted(FlushBatcher::key("job-a", 0));
   std::vector<std::thread> threads;
   std::atomic<int> answered{0};
   for (const LeasedChain* chain : {&a, &b, &c}) {
@@ -298,23 +338,43 @@ TEST(FlushBatcher, SendsOneBatchOnceEveryChainOfTheJobHasFlushed) {
   EXPECT_EQ(batcher.stats().flushes, 3);
 }
 
+TEST(FlushBatcher, ChainsOfTwoErrorGroupsGoInBatchesOfTheirOwn) {
+  Recorder recorder;
+  recorder.answer = [](const BatchItem&, int) { return accepted(); };
+  FlushBatcher batcher(60, [&](const std::vector<BatchItem*>& items) { return recorder(items); });
+  LeasedChain chains[4] = {chainOf("job-a", 0), chainOf("job-a", 1), chainOf("job-a", 2),
+                           chainOf("job-a", 3)};
+  chains[2].spec.errorGroup = chains[3].spec.errorGroup = 1;
+  for (const LeasedChain& c : chains) batcher.chainStarted(FlushBatcher::key(c));
+  std::vector<std::thread> threads;
+  for (const LeasedChain& c : chains) {
+    threads.emplace_back([&] { batcher.upload(c, flushOf(c.spec.chainIndex, 0)); });
+  }
+  for (std::thread& t : threads) t.join();
+  ASSERT_EQ(recorder.batches.size(), 2u) << "one full batch a group, at once";
+  for (const auto& batch : recorder.batches) {
+    ASSERT_EQ(batch.size(), 2u);
+    EXPECT_EQ(batch[0].second / 2, batch[1].second / 2) << "chains of one group together";
+  }
+}
+
 TEST(FlushBatcher, ALoneFlushGoesWhenTheWindowEndsOrItsPeerEnds) {
   Recorder recorder;
   recorder.answer = [](const BatchItem&, int) { return accepted(); };
   FlushBatcher batcher(0.2, [&](const std::vector<BatchItem*>& items) { return recorder(items); });
   const LeasedChain a = chainOf("job-a", 0);
-  batcher.chainStarted("job-a");
-  batcher.chainStarted("job-a");  // its peer never flushes
+  batcher.chainStarted(FlushBatcher::key("job-a", 0));
+  batcher.chainStarted(FlushBatcher::key("job-a", 0));  // its peer never flushes
   const auto start = std::chrono::steady_clock::now();
   EXPECT_TRUE(batcher.upload(a, flushOf(0, 0)).accepted);
   EXPECT_GE(std::chrono::steady_clock::now() - start, milliseconds(200));
   // With a window of a minute, the peer's end completes the batch.
   FlushBatcher patient(60, [&](const std::vector<BatchItem*>& items) { return recorder(items); });
-  patient.chainStarted("job-a");
-  patient.chainStarted("job-a");
+  patient.chainStarted(FlushBatcher::key("job-a", 0));
+  patient.chainStarted(FlushBatcher::key("job-a", 0));
   std::thread ender([&] {
     std::this_thread::sleep_for(milliseconds(100));
-    patient.chainEnded("job-a");
+    patient.chainEnded(FlushBatcher::key("job-a", 0));
   });
   EXPECT_TRUE(patient.upload(a, flushOf(0, 1)).accepted);
   ender.join();
@@ -328,8 +388,8 @@ TEST(FlushBatcher, AFlushWaitsAtMostAShareOfItsChainsInterval) {
   recorder.answer = [](const BatchItem&, int) { return accepted(); };
   FlushBatcher batcher(5, [&](const std::vector<BatchItem*>& items) { return recorder(items); });
   const LeasedChain a = chainOf("job-a", 0), b = chainOf("job-a", 1);
-  batcher.chainStarted("job-a");
-  batcher.chainStarted("job-a");
+  batcher.chainStarted(FlushBatcher::key("job-a", 0));
+  batcher.chainStarted(FlushBatcher::key("job-a", 0));
   std::thread peer([&] { batcher.upload(b, flushOf(1, 0)); });
   EXPECT_TRUE(batcher.upload(a, flushOf(0, 0)).accepted);  // both: sent at once
   peer.join();
@@ -343,7 +403,7 @@ TEST(FlushBatcher, AFlushWaitsAtMostAShareOfItsChainsInterval) {
   EXPECT_EQ(recorder.batches[1].size(), 1u);
   // A chain that joins the job later waits by the job's interval too, not the window.
   const LeasedChain c = chainOf("job-a", 2);
-  batcher.chainStarted("job-a");
+  batcher.chainStarted(FlushBatcher::key("job-a", 0));
   const auto joined = std::chrono::steady_clock::now();
   EXPECT_TRUE(batcher.upload(c, flushOf(2, 0)).accepted);
   EXPECT_LT(std::chrono::steady_clock::now() - joined, milliseconds(1000));
@@ -363,8 +423,8 @@ TEST(FlushBatcher, SendsAgainWhatWasHeldBackAndFailsWhatCannotBeDelivered) {
   };
   FlushBatcher batcher(60, [&](const std::vector<BatchItem*>& items) { return recorder(items); });
   const LeasedChain a = chainOf("job-a", 0), b = chainOf("job-a", 1);
-  batcher.chainStarted("job-a");
-  batcher.chainStarted("job-a");
+  batcher.chainStarted(FlushBatcher::key("job-a", 0));
+  batcher.chainStarted(FlushBatcher::key("job-a", 0));
   std::string error;
   std::thread other([&] {
     try {
@@ -384,7 +444,7 @@ TEST(FlushBatcher, SendsAgainWhatWasHeldBackAndFailsWhatCannotBeDelivered) {
   FlushBatcher broken(0, [](const std::vector<BatchItem*>&) -> std::vector<BatchAnswer> {
     throw std::runtime_error("cannot deliver: coordinator gone");
   });
-  broken.chainStarted("job-a");
+  broken.chainStarted(FlushBatcher::key("job-a", 0));
   EXPECT_THROW(broken.upload(a, flushOf(0, 0)), std::runtime_error);
 }
 

@@ -11,15 +11,19 @@ FlushBatcher::FlushBatcher(double windowSeconds, Send send)
           std::chrono::duration<double>(std::max(0.0, windowSeconds)))),
       send_(std::move(send)) {}
 
-void FlushBatcher::chainStarted(const std::string& jobId) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  ++jobs_[jobId].running;
+std::string FlushBatcher::key(const std::string& jobId, uint32_t errorGroup) {
+  return jobId + "/" + std::to_string(errorGroup);
 }
 
-void FlushBatcher::chainEnded(const std::string& jobId) {
+void FlushBatcher::chainStarted(const std::string& key) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++jobs_[key].running;
+}
+
+void FlushBatcher::chainEnded(const std::string& key) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    JobQueue& queue = jobs_[jobId];
+    JobQueue& queue = jobs_[key];
     queue.running = std::max(0, queue.running - 1);
   }
   changed_.notify_all();  // the batch may be full now
@@ -35,7 +39,7 @@ FlushReceipt FlushBatcher::upload(const LeasedChain& chain, ChainFlush&& flush) 
   self.item.chain = &chain;
   self.item.flush = std::move(flush);
   std::unique_lock<std::mutex> lock(mutex_);
-  JobQueue& queue = jobs_[chain.jobId];  // map nodes stay put: the reference outlives inserts
+  JobQueue& queue = jobs_[key(chain)];  // map nodes stay put: the reference outlives inserts
   const Clock::time_point arrived = Clock::now();
   // How long this flush may wait for its peers: the window, and no more than a share of the
   // time its chain took since its previous answer; for a chain's first flush, of the last

@@ -54,10 +54,17 @@ class FlushBatcher {
 
   FlushBatcher(double windowSeconds, Send send);
 
-  // A chain of the job started or ended on this worker: a batch is full when it holds a flush
-  // of every chain the worker runs for its job.
-  void chainStarted(const std::string& jobId);
-  void chainEnded(const std::string& jobId);
+  // A batch holds flushes of one job's chains of one error group (ChainSpec::errorGroup): the
+  // coordinator sums each group apart. This is its queue's key.
+  static std::string key(const std::string& jobId, uint32_t errorGroup);
+  static std::string key(const LeasedChain& chain) {
+    return key(chain.jobId, chain.spec.errorGroup);
+  }
+
+  // A chain of the queue `key` started or ended on this worker: a batch is full when it holds a
+  // flush of every chain the worker runs for its job and group.
+  void chainStarted(const std::string& key);
+  void chainEnded(const std::string& key);
 
   // Blocks until the flush has been sent (in some batch) and answered; throws
   // std::runtime_error when it cannot be delivered.

@@ -312,7 +312,7 @@ std::vector<LeasedChain> RemoteChainSource::lease(int max, double waitSeconds) {
       chain.epoch = lease.epoch();
       chain.bundleHash = lease.bundle_hash();
       chain.scenePath = lease.scene_path();
-      if (impl_->batcher) impl_->batcher->chainStarted(chain.jobId);
+      if (impl_->batcher) impl_->batcher->chainStarted(FlushBatcher::key(chain));
       chains.push_back(std::move(chain));
     }
     return chains;
@@ -339,7 +339,7 @@ FlushBatcher::Stats RemoteChainSource::batchStats() const {
 }
 
 void RemoteChainSource::release(const LeasedChain& chain) {
-  if (impl_->batcher) impl_->batcher->chainEnded(chain.jobId);
+  if (impl_->batcher) impl_->batcher->chainEnded(FlushBatcher::key(chain));
 }
 
 namespace {

@@ -40,11 +40,23 @@ struct ChainSpec {
   // mutations (pssmlt) or samples (pt/bdpt) this chain runs; < 0: until told to stop
   int64_t budget = 0;
   int64_t flushInterval = 0;  // mutations (or samples) between flushes
+  // The independent group of chains this one belongs to: the coordinator sums each group's
+  // flushes apart and estimates the image's error from the spread between the groups' images
+  // (common/film/batch_means.h); a worker sums only flushes of one group into one upload.
+  uint32_t errorGroup = 0;
   // Resume: the state a previous flush reported (empty: start from the seed); see ChainFlush.
   std::string resumeState;
   int64_t resumeMutations = 0;    // mutations already done when resumeState was taken
   uint32_t resumeFlushIndex = 0;  // flush index the resumed chain continues with
 };
+
+// Each chain's error group, in chain order.
+inline std::vector<uint32_t> errorGroupsOf(const std::vector<ChainSpec>& chains) {
+  std::vector<uint32_t> groups;
+  groups.reserve(chains.size());
+  for (const ChainSpec& c : chains) groups.push_back(c.errorGroup);
+  return groups;
+}
 
 // How often one kind of proposal was made and accepted (PSSMLT's large and small steps, each of
 // path-space MLT's mutations).

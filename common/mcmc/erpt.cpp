@@ -26,6 +26,9 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
   if (!(spec.erptDeposit > 0) || spec.erptLength < 1 || !(spec.erptChains > 0))
     throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
                              ": ERPT needs a positive deposit, length and chain count");
+  if (spec.firstSample < 0 || spec.firstSample % tilePixels != 0)
+    throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
+                             ": its first seed must start a pass over the tile");
   MutationMix perturbations{0, 0, 1, 1, 0};  // Cline et al.: lens and caustic perturbations
   PathChain chain(scene, spec.maxDepth, perturbations);
   PathTracer tracer(scene, spec.maxDepth);
@@ -35,7 +38,8 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
   const int width = scene.camera().width();
   Path x;
   while (flusher.budgetLeft()) {
-    const int64_t k = flusher.done();
+    // Seeds are numbered within the tile: a work unit of later passes starts at firstSample.
+    const int64_t k = (spec.budget >= 0 ? spec.firstSample : 0) + flusher.done();
     Vec2f seedFilm;
     Rng rng;
     if (spec.budget >= 0) {

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,13 +18,15 @@
 namespace farm {
 namespace {
 
-// An ERPT job on the Cornell box at size x size, and its tiles.
+// An ERPT job on the Cornell box at size x size, and its tiles (one work unit a tile with one
+// error group; a unit a tile and group otherwise).
 std::vector<ChainSpec> erptTiles(int size, double timeBudget, int length,
-                                 std::unique_ptr<RenderJob>* job) {
+                                 std::unique_ptr<RenderJob>* job, int spp = 2, int groups = 1) {
   RenderSettings settings;
   settings.algorithm = Algorithm::ERPT;
   settings.width = settings.height = size;
-  settings.samplesPerPixel = 2;
+  settings.samplesPerPixel = spp;
+  settings.errorGroups = groups;
   settings.timeBudgetSeconds = timeBudget;
   settings.erptLength = length;
   settings.bootstrapSamples = 1 << 14;
@@ -78,6 +82,55 @@ TEST(Erpt, TimeBudgetedSeedsCoverTheFilm) {
     return false;
   });
   for (double q : quadrant) EXPECT_GT(q, 0);
+}
+
+// With error groups, each tile's passes are split among the groups, whole passes each, group
+// after group: the units of a tile run the undivided tile's seeds, so their flushes sum to its
+// film (to float rounding), and each group covers every tile.
+TEST(Erpt, ErrorGroupsSplitEachTilesPassesAndKeepItsSeeds) {
+  std::unique_ptr<RenderJob> wholeOwner, splitOwner;
+  const std::vector<ChainSpec> whole = erptTiles(48, 0, 10, &wholeOwner, 5, 1);
+  const std::vector<ChainSpec> split = erptTiles(48, 0, 10, &splitOwner, 5, 2);
+  ASSERT_EQ(whole.size(), 4u);
+  ASSERT_EQ(split.size(), 8u);
+  const int64_t tilePixels = 32 * 32;
+  for (size_t t = 0; t < 4; ++t) {
+    EXPECT_EQ(split[t].errorGroup, 0u);
+    EXPECT_EQ(split[4 + t].errorGroup, 1u);
+    EXPECT_EQ(split[t].tileX, whole[t].tileX);
+    EXPECT_EQ(split[4 + t].tileY, whole[t].tileY);
+  }
+  EXPECT_EQ(split[0].firstSample, 0);
+  EXPECT_EQ(split[0].budget, 3 * tilePixels);  // 5 passes: 3 and 2
+  EXPECT_EQ(split[4].firstSample, 3 * tilePixels);
+  EXPECT_EQ(split[4].budget, 2 * tilePixels);
+
+  auto film = [](const RenderJob& job, ChainSpec spec) {
+    std::vector<double> sum;
+    spec.flushInterval = spec.budget;
+    job.runChain(spec, [&](ChainFlush&& f) {
+      sum.resize(f.splats.size(), 0.0);
+      for (size_t i = 0; i < f.splats.size(); ++i) sum[i] += f.splats[i];
+      return true;
+    });
+    return sum;
+  };
+  const std::vector<double> expected = film(*wholeOwner, whole[0]);
+  std::vector<double> sum = film(*splitOwner, split[0]);
+  const std::vector<double> second = film(*splitOwner, split[4]);
+  ASSERT_EQ(sum.size(), expected.size());
+  double total = 0, worst = 0;
+  for (size_t i = 0; i < sum.size(); ++i) {
+    total += expected[i];
+    worst = std::max(worst, std::abs(sum[i] + second[i] - expected[i]) / (1 + expected[i]));
+  }
+  EXPECT_GT(total, 0);
+  EXPECT_LT(worst, 1e-4);
+
+  ChainSpec offPass = split[4];
+  offPass.firstSample += 1;
+  EXPECT_THROW(splitOwner->runChain(offPass, [](ChainFlush&&) { return true; }),
+               std::runtime_error);
 }
 
 }  // namespace

@@ -233,6 +233,8 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
   if (mcmc && chains == 0) throw std::runtime_error("the bootstrap produced no seed paths");
   const int64_t planned = plannedWork();
   const int64_t pixels = int64_t(width()) * height();
+  const int groups =
+      std::min(settings_.errorGroups > 0 ? settings_.errorGroups : kErrorGroups, chains);
   // Flush about once per image's worth of work per chain: large enough that a flush's cost
   // (the whole film) is small against the work it carries. Unless the user says otherwise.
   const int64_t interval = settings_.flushInterval > 0
@@ -268,6 +270,8 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
       s.seedContribution = bootstrap.seedContributions[c];
     }
     s.flushInterval = s.budget > 0 ? std::min(interval, s.budget) : interval;
+    s.errorGroup = uint32_t(int64_t(c) * groups / chains);  // contiguous: a worker's chains
+                                                            // mostly share one
     specs.push_back(std::move(s));
   }
   return specs;
@@ -279,34 +283,46 @@ std::vector<ChainSpec> RenderJob::planTiles(const BootstrapResult& bootstrap) co
   // worker at 16 seeds per pixel, and enough of them to spread over many hosts.
   constexpr int kTile = 32;
   const int64_t spp = settings_.timeBudgetSeconds > 0 ? -1 : settings_.samplesPerPixel;
+  // Each tile's passes are split among the error groups (whole passes, so that every group's
+  // image covers the film evenly): one work unit per group and tile, group after group. The
+  // seeds are those of the undivided tile (a seed's numbers follow its pixel and pass).
+  const int asked = settings_.errorGroups > 0 ? settings_.errorGroups : kErrorGroups;
+  const int groups = int(spp < 0 ? asked : std::min<int64_t>(asked, spp));
   std::vector<ChainSpec> specs;
-  for (int y = 0; y < height(); y += kTile) {
-    for (int x = 0; x < width(); x += kTile) {
-      ChainSpec s;
-      s.jobId = jobId_;
-      s.chainIndex = uint32_t(specs.size());
-      s.algorithm = Algorithm::ERPT;
-      s.seed = settings_.seed;
-      s.maxDepth = resolvedMaxDepth(settings_, *scene_);
-      s.tileX = x;
-      s.tileY = y;
-      s.tileWidth = std::min(kTile, width() - x);
-      s.tileHeight = std::min(kTile, height() - y);
-      const int64_t tilePixels = int64_t(s.tileWidth) * s.tileHeight;
-      s.budget = spp < 0 ? -1 : tilePixels * spp;
-      // Flush every few thousand seeds (or what the user asked for), in whole passes over the
-      // tile.
-      const int64_t passes =
-          settings_.flushInterval > 0
-              ? std::max<int64_t>(1, (settings_.flushInterval + tilePixels - 1) / tilePixels)
-              : std::max<int64_t>(1, 4096 / tilePixels);
-      s.flushInterval =
-          s.budget > 0 ? std::min(passes * tilePixels, s.budget) : passes * tilePixels;
-      s.erptChains = settings_.erptChains;
-      s.erptLength = settings_.erptLength;
-      s.erptDeposit = bootstrap.normalization / (settings_.erptChains * settings_.erptLength);
-      specs.push_back(std::move(s));
+  int64_t firstPass = 0;
+  for (int g = 0; g < groups; ++g) {
+    const int64_t groupPasses = spp < 0 ? -1 : spp / groups + (g < spp % groups ? 1 : 0);
+    for (int y = 0; y < height(); y += kTile) {
+      for (int x = 0; x < width(); x += kTile) {
+        ChainSpec s;
+        s.errorGroup = uint32_t(g);
+        s.jobId = jobId_;
+        s.chainIndex = uint32_t(specs.size());
+        s.algorithm = Algorithm::ERPT;
+        s.seed = settings_.seed;
+        s.maxDepth = resolvedMaxDepth(settings_, *scene_);
+        s.tileX = x;
+        s.tileY = y;
+        s.tileWidth = std::min(kTile, width() - x);
+        s.tileHeight = std::min(kTile, height() - y);
+        const int64_t tilePixels = int64_t(s.tileWidth) * s.tileHeight;
+        s.budget = spp < 0 ? -1 : tilePixels * groupPasses;
+        s.firstSample = spp < 0 ? 0 : tilePixels * firstPass;
+        // Flush every few thousand seeds (or what the user asked for), in whole passes over the
+        // tile.
+        const int64_t passes =
+            settings_.flushInterval > 0
+                ? std::max<int64_t>(1, (settings_.flushInterval + tilePixels - 1) / tilePixels)
+                : std::max<int64_t>(1, 4096 / tilePixels);
+        s.flushInterval =
+            s.budget > 0 ? std::min(passes * tilePixels, s.budget) : passes * tilePixels;
+        s.erptChains = settings_.erptChains;
+        s.erptLength = settings_.erptLength;
+        s.erptDeposit = bootstrap.normalization / (settings_.erptChains * settings_.erptLength);
+        specs.push_back(std::move(s));
+      }
     }
+    firstPass += std::max<int64_t>(groupPasses, 0);
   }
   return specs;
 }

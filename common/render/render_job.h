@@ -41,6 +41,12 @@ struct Progress {  // reported by long stages; return false from the callback to
 };
 using ProgressCallback = std::function<bool(const Progress&)>;
 
+// The chains of a job fall into up to this many independent groups (ChainSpec::errorGroup),
+// whose images' spread estimates the image's error without a reference
+// (common/film/batch_means.h). More groups: a steadier estimate, and a film each on the
+// coordinator.
+constexpr int kErrorGroups = 4;
+
 class RenderJob {
  public:
   RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings, std::string jobId);

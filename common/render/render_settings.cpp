@@ -43,6 +43,12 @@ std::string RenderSettings::validate() const {
     err << "--medium-samples must be in 1..1024 estimates, not " << mediumSamples;
   } else if (mediumMarchSteps < 0 || mediumMarchSteps > 1 << 16) {
     err << "--medium-march must be in 0.." << (1 << 16) << " steps, not " << mediumMarchSteps;
+  } else if (!std::isfinite(untilError) || untilError < 0) {
+    err << "--until-error must be a relative MSE >= 0 (0: none), not " << untilError;
+  } else if (errorGroups < 0 || errorGroups > 64) {
+    err << "--error-groups must be in 0..64 (0: the default), not " << errorGroups;
+  } else if (errorGroups == 1 && untilError > 0) {
+    err << "--until-error needs an error estimate, which --error-groups 1 turns off";
   }
   return err.str();
 }

@@ -33,6 +33,13 @@ struct RenderSettings {
   // within 4096 .. 2^20). Longer intervals mean fewer, denser uploads (README, "Scale") and
   // more work lost with a worker that dies.
   int64_t flushInterval = 0;
+  // > 0: the job ends once the relative MSE estimated from the spread between its chain groups
+  // (common/film/batch_means.h) is at most this, or at its budget, whichever comes first.
+  double untilError = 0;
+  // The independent groups the chains fall into for that estimate (ChainSpec::errorGroup); 0:
+  // kErrorGroups (render_job.h); 1: no estimate, and one film on the coordinator, not one a
+  // group. At most the chain count (erpt: seeds per pixel).
+  int errorGroups = 0;
 
   // Empty when the settings are usable, otherwise what is wrong (for the user, one line).
   std::string validate() const;
