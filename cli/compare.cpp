@@ -100,18 +100,20 @@ Status fetchRemoteImage(FarmClient& client, const std::string& job, const std::s
 
 }  // namespace
 
-bool parseAlgorithms(const std::string& list, std::vector<Algorithm>* out, std::string* error) {
+bool parseAlgorithms(const std::string& list, std::vector<AlgorithmChoice>* out,
+                     std::string* error) {
   out->clear();
   std::stringstream in(list);
   std::string name;
   while (std::getline(in, name, ',')) {
-    Algorithm a;
-    if (!parseAlgorithm(name, &a)) {
-      *error = "--algorithms: '" + name + "' is not one of " + algorithmList();
+    AlgorithmChoice a;
+    a.automatic = name == "auto";
+    if (!a.automatic && !parseAlgorithm(name, &a.algorithm)) {
+      *error = "--algorithms: '" + name + "' is not one of " + algorithmList() + ", auto";
       return false;
     }
-    for (Algorithm b : *out) {
-      if (a == b) {
+    for (const AlgorithmChoice& b : *out) {
+      if (a.name() == b.name()) {
         *error = "--algorithms names " + name + " twice";
         return false;
       }
@@ -119,7 +121,7 @@ bool parseAlgorithms(const std::string& list, std::vector<Algorithm>* out, std::
     out->push_back(a);
   }
   if (out->empty()) {
-    *error = "--algorithms names none (one or more of " + std::string(algorithmList()) + ")";
+    *error = "--algorithms names none (one or more of " + std::string(algorithmList()) + ", auto)";
     return false;
   }
   return true;
@@ -137,10 +139,11 @@ Status runCompare(const CompareOptions& o, CompareResult* result) {
     std::string error;
     if (!collectSceneBundle(o.scene, &bundle, &error, {})) return Status::invalidArgument(error);
   }
-  for (Algorithm algorithm : o.algorithms) {
-    const std::string name = algorithmName(algorithm);
+  for (const AlgorithmChoice& choice : o.algorithms) {
+    const std::string name = choice.name();
     RenderSettings settings = o.settings;
-    settings.algorithm = algorithm;
+    settings.algorithm = choice.algorithm;
+    settings.autoAlgorithm = choice.automatic;
     JobProgress progress;
     Image image;
     ImageMetadata metadata;

@@ -18,10 +18,17 @@
 
 namespace farm {
 
+// One job of a comparison: an algorithm, or auto (the plan's pick after its pilot).
+struct AlgorithmChoice {
+  Algorithm algorithm = Algorithm::PSSMLT;
+  bool automatic = false;
+  std::string name() const { return automatic ? "auto" : algorithmName(algorithm); }
+};
+
 struct CompareOptions {
   std::string scene, reference, reportDir;
   std::string coordinator;  // HOST:PORT, or empty: render here
-  std::vector<Algorithm> algorithms;
+  std::vector<AlgorithmChoice> algorithms;
   RenderSettings settings;  // all but the algorithm, shared by every job
   int threads = 1;          // embedded
   std::function<void(const std::string& name, const JobProgress&)> onProgress;
@@ -41,7 +48,8 @@ Status runCompare(const CompareOptions& options, CompareResult* result);
 Status runJobReport(const std::string& coordinator, const std::string& jobId,
                     const std::string& reportDir, CompareResult* result);
 
-// "pt,bdpt,mlt" -> algorithms, each once, in order; false with *error naming the bad one.
-bool parseAlgorithms(const std::string& list, std::vector<Algorithm>* out, std::string* error);
+// "pt,bdpt,mlt,auto" -> algorithms, each once, in order; false with *error naming the bad one.
+bool parseAlgorithms(const std::string& list, std::vector<AlgorithmChoice>* out,
+                     std::string* error);
 
 }  // namespace farm

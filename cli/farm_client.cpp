@@ -57,6 +57,7 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   for (const v1::MutationTally& t : m.tallies())
     p->tallies.push_back({t.name(), t.proposed(), t.accepted()});
   p->warnings.assign(m.warnings().begin(), m.warnings().end());
+  p->renderPlan.assign(m.render_plan().begin(), m.render_plan().end());
   p->setAside.assign(m.set_aside().begin(), m.set_aside().end());
   p->rays = m.rays();
   p->raysPerSecond = m.rays_per_second();

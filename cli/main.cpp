@@ -18,6 +18,9 @@
 #include "cli/farm_client.h"
 #include "cli/render_report.h"
 #include "common/film/image.h"
+#include "common/plan/scene_analysis.h"
+#include "common/render/algorithm_pilot.h"
+#include "common/scene/scene.h"
 
 namespace {
 
@@ -64,6 +67,7 @@ struct RenderOptions {
   int64_t flushEvery = 0;
   double untilError = 0;
   int errorGroups = 0;
+  bool noPlan = false;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -72,7 +76,10 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       ->add_option("--algorithm", o->algorithm,
                    "pt (path tracing), bdpt (bidirectional), pssmlt (primary-sample MLT over "
                    "bdpt), pssmlt-pt (the same over pt), mmlt (multiplexed MLT), mlt (path-space "
-                   "MLT with Veach's mutations), erpt (energy redistribution path tracing)")
+                   "MLT with Veach's mutations), erpt (energy redistribution path tracing), "
+                   "auto (the scene's plan picks one: `farm plan SCENE` shows how; where it "
+                   "names several candidates, a pilot of each, 10% of --time in all or 1 s "
+                   "each, ranks them by estimated error x time)")
       ->default_str("pssmlt");
   command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt), seeds per pixel (erpt)")
       ->default_str("16");
@@ -142,6 +149,11 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "coordinator keeps a film for each. 1: no estimate, one film; 0: " +
                        std::to_string(farm::kErrorGroups))
       ->default_str("0");
+  command->add_flag(
+      "--no-plan", o->noPlan,
+      "keep every part the settings name, even those the scene's plan leaves out (mlt's "
+      "caustic, multi-chain and manifold perturbations on a scene without specular surfaces): "
+      "to measure what leaving them out saves");
   o->timeOption = command->add_option(
       "--time", o->time,
       "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
@@ -161,11 +173,13 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
 
 // Checks the option values with the user's names for them; false with *error otherwise.
 bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* error) {
-  if (!farm::parseAlgorithm(o.algorithm, &s->algorithm)) {
-    *error =
-        std::string("--algorithm must be ") + farm::algorithmList() + ", not '" + o.algorithm + "'";
+  s->autoAlgorithm = o.algorithm == "auto";
+  if (!s->autoAlgorithm && !farm::parseAlgorithm(o.algorithm, &s->algorithm)) {
+    *error = std::string("--algorithm must be ") + farm::algorithmList() + " or auto, not '" +
+             o.algorithm + "'";
     return false;
   }
+  s->ignorePlan = o.noPlan;
   constexpr int64_t kMaxPerPixel = int64_t(1) << 24;
   if (o.spp < 1 || o.spp > kMaxPerPixel) {
     *error = "--spp must be between 1 and " + std::to_string(kMaxPerPixel) + ", not " +
@@ -498,6 +512,73 @@ int runCompareCommand(const std::string& scene, const std::string& algorithms,
   return 0;
 }
 
+int runPlan(const std::string& scenePath, const std::string& algorithm,
+            const std::string& mutationMix, double time, int width, int height, bool pilot,
+            bool json) {
+  farm::RenderSettings settings;
+  std::string error;
+  settings.autoAlgorithm = algorithm == "auto";
+  if (!settings.autoAlgorithm && !farm::parseAlgorithm(algorithm, &settings.algorithm)) {
+    return fail(std::string("--algorithm must be ") + farm::algorithmList() + " or auto, not '" +
+                    algorithm + "'",
+                kUsageError);
+  }
+  if (!farm::parseMutationMix(mutationMix, &settings.mutationMix, &error))
+    return fail("--mutation-mix: " + error, kUsageError);
+  if (!(std::isfinite(time) && time >= 0)) return fail("--time must be >= 0 seconds", kUsageError);
+  settings.timeBudgetSeconds = time;
+  settings.width = width;
+  settings.height = height;
+  if (std::string problem = settings.validate(); !problem.empty())
+    return fail(problem, kUsageError);
+  if (pilot && !settings.autoAlgorithm)
+    return fail("--pilot ranks auto's candidates: it needs --algorithm auto", kUsageError);
+  if (!fs::is_regular_file(scenePath)) return fail("scene file '" + scenePath + "' does not exist");
+  farm::RenderPlan plan;
+  try {
+    std::shared_ptr<farm::Scene> scene = farm::loadScene(scenePath, settings);
+    if (pilot) {
+      plan = farm::planJob(scene, &settings);
+    } else {
+      plan = farm::planRender(farm::analyseScene(*scene), settings.algorithm,
+                              settings.autoAlgorithm, settings.mutationMix);
+    }
+  } catch (const std::exception& e) {
+    return fail(e.what());
+  }
+  const std::vector<std::string> lines = plan.describe();
+  if (json) {
+    nlohmann::json j;
+    j["scene"] = scenePath;
+    j["algorithm"] = farm::algorithmName(plan.algorithm);
+    j["automatic"] = plan.automatic;
+    std::vector<std::string> candidates;
+    for (farm::Algorithm a : plan.shortlist) candidates.push_back(farm::algorithmName(a));
+    j["candidates"] = candidates;
+    j["mutation_mix"] = farm::formatMutationMix(plan.mutationMix);
+    nlohmann::json parts = nlohmann::json::array();
+    for (const farm::PlanPart& p : plan.parts)
+      parts.push_back({{"name", p.name}, {"enabled", p.enabled}, {"reason", p.reason}});
+    j["parts"] = parts;
+    nlohmann::json figures = nlohmann::json::array();
+    for (const farm::PilotFigure& f : plan.pilot) {
+      figures.push_back({{"algorithm", farm::algorithmName(f.algorithm)},
+                         {"seconds", f.seconds},
+                         {"bootstrap_seconds", f.bootstrapSeconds},
+                         {"estimated_relmse", f.estimatedRelMse},
+                         {"score", f.score},
+                         {"failure", f.failure}});
+    }
+    j["pilot"] = figures;
+    j["lines"] = lines;
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << "plan for " << scenePath << ":\n";
+  for (const std::string& line : lines) std::cout << "  " << line << "\n";
+  return 0;
+}
+
 int runReportCommand(const std::string& coordinator, const std::string& job,
                      const std::string& reportDir) {
   farm::CompareResult result;
@@ -612,6 +693,34 @@ int main(int argc, char** argv) {
   report->add_option("JOB", job, "job id")->required();
   report->add_option("DIR", reportJobDir, "the report directory")->required();
 
+  // plan
+  CLI::App* planCommand = app.add_subcommand(
+      "plan",
+      "print what SCENE has (surfaces by kind, lights with sizes and powers, lens, textures, "
+      "environment, media) and the render it implies: the algorithm (auto: the candidates, or "
+      "with --pilot the pilot's pick and figures), mlt's mutation weights, and each part in or "
+      "left out, and why");
+  std::string planScene, planAlgorithm = "auto", planMix;
+  double planTime = 0;
+  int planWidth = 0, planHeight = 0;
+  bool planPilot = false;
+  planCommand->add_option("SCENE", planScene, "scene file")->required();
+  planCommand
+      ->add_option("--algorithm", planAlgorithm,
+                   std::string("the algorithm to plan for: ") + farm::algorithmList() + ", auto")
+      ->default_str("auto");
+  planCommand->add_option("--mutation-mix", planMix, "mlt's requested mutation weights")
+      ->default_str(farm::formatMutationMix(farm::MutationMix()));
+  planCommand->add_flag("--pilot", planPilot,
+                        "run auto's pilot here, a few seconds per candidate, and show its pick");
+  planCommand
+      ->add_option("--time", planTime,
+                   "the job's budget in seconds: the pilot takes 10% of it (0: 1 s a candidate)")
+      ->default_str("0");
+  planCommand->add_option("--width", planWidth, "film width for the pilot (default: the scene's)");
+  planCommand->add_option("--height", planHeight, "film height for the pilot");
+  planCommand->add_flag("--json", json, "print JSON instead of text");
+
   // cancel, list
   CLI::App* cancel = app.add_subcommand("cancel", "cancel a job");
   cancel->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
@@ -643,6 +752,9 @@ int main(int argc, char** argv) {
                              compareThreads, compareDir);
   }
   if (*report) return runReportCommand(address, job, reportJobDir);
+  if (*planCommand)
+    return runPlan(planScene, planAlgorithm, planMix, planTime, planWidth, planHeight, planPilot,
+                   json);
   if (*submit) return runSubmit(address, submitScene, submitOptions);
   if (*status) return runStatus(address, job, json);
   if (*fetch) return runFetch(address, job, fetchOutput, timeout);

@@ -71,6 +71,14 @@ std::string warningLines(const JobProgress& p) {
   return s;
 }
 
+// "  plan:\n    LINE\n..." with the scene's plan, or nothing before the job has one.
+std::string planLines(const JobProgress& p) {
+  if (p.renderPlan.empty()) return "";
+  std::string s = "  plan:\n";
+  for (const std::string& line : p.renderPlan) s += "    " + line + "\n";
+  return s;
+}
+
 // "  acceptance: bidir 12.3% of 1.2M, lens 64.0% of 3.4M\n", or nothing without tallies.
 std::string acceptanceLine(const JobProgress& p) {
   if (p.tallies.empty()) return "";
@@ -164,6 +172,7 @@ std::string statusText(const JobProgress& p) {
   out << acceptanceLine(p);
   out << rejectedLine(p);
   out << warningLines(p);
+  out << planLines(p);
   if (const ErrorSample* e = latestMeasured(p)) {
     out << "  error vs reference: rmse " << format("%.6g", e->rmse) << ", relMSE "
         << format("%.6g", e->relMse) << " (at " << format("%.1f", e->elapsedSeconds) << " s)\n";
@@ -207,6 +216,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["rays_per_second"] = p.raysPerSecond;
   j["has_reference"] = p.hasReference;
   j["warnings"] = p.warnings;
+  j["render_plan"] = p.renderPlan;
   j["set_aside"] = p.setAside;
   nlohmann::json tallies = nlohmann::json::object();
   for (const MutationTally& t : p.tallies) {
@@ -256,6 +266,7 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   out << rejectedLine(p);
   out << acceptanceLine(p);
   out << warningLines(p);
+  out << planLines(p);
   if (const ErrorSample* e = latestMeasured(p)) {
     out << "  error vs " << referencePath << ": rmse " << format("%.6g", e->rmse) << ", relMSE "
         << format("%.6g", e->relMse);

@@ -166,6 +166,13 @@ bool writeReportPage(const std::string& dir, const std::string& title, const std
     }
     html << "<figcaption>" << escapeHtml(e.name) << "</figcaption></figure>\n";
   }
+  html << "<h2>Plans</h2>\n";
+  for (const ReportEntry& e : entries) {
+    html << "<h3>" << escapeHtml(e.name) << "</h3>\n<pre>";
+    for (const std::string& line : e.progress.renderPlan) html << escapeHtml(line) << "\n";
+    if (e.progress.renderPlan.empty()) html << "(no plan: the job did not get that far)\n";
+    html << "</pre>\n";
+  }
   html << "</body></html>\n";
   const std::string path = (fs::path(dir) / "index.html").string();
   std::ofstream out(path);

@@ -277,7 +277,7 @@ std::vector<WorkerLease> Coordinator::leaseNow(const std::string& workerId,
   std::vector<WorkerLease> leases;
   for (auto& job : jobs) {
     if (int(leases.size()) >= max) break;
-    if (!worker.capabilities.count(job->spec().settings.algorithm)) continue;
+    if (!worker.capabilities.count(job->algorithm())) continue;
     for (WorkerLease& lease : job->lease(workerId, max - int(leases.size()), now)) {
       leases.push_back(std::move(lease));
     }

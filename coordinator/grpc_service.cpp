@@ -121,6 +121,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
     tally->set_accepted(t.accepted);
   }
   for (const std::string& w : p.warnings) m->add_warnings(w);
+  for (const std::string& line : p.renderPlan) m->add_render_plan(line);
   for (const std::string& w : p.setAside) m->add_set_aside(w);
   m->set_width(p.width);
   m->set_height(p.height);

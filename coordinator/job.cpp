@@ -6,6 +6,7 @@
 
 #include "common/film/batch_means.h"
 #include "common/film/error_metrics.h"
+#include "common/render/algorithm_pilot.h"
 #include "common/scene/scene.h"
 #include "coordinator/job_store.h"
 #include "coordinator/progress_math.h"
@@ -74,6 +75,7 @@ Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std:
          int maxChainFailures)
     : id_(std::move(id)),
       spec_(std::move(spec)),
+      settings_(spec_.settings),
       leaseDuration_(leaseDuration),
       outputDir_(std::move(outputDir)),
       submitted_(SteadyClock::now()),
@@ -86,6 +88,11 @@ Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std:
 Job::~Job() {
   cancelRequested_ = true;
   if (preparer_.joinable()) preparer_.join();
+}
+
+Algorithm Job::algorithm() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return settings_.algorithm;
 }
 
 void Job::start() {
@@ -113,13 +120,21 @@ void Job::prepare() {
     const auto loadStart = SteadyClock::now();
     std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, spec_.settings);
     for (const std::string& w : scene->description().warnings) log("scene warning: " + w);
-    auto renderJob = std::make_shared<RenderJob>(scene, spec_.settings, id_);
+    // The plan (and with --algorithm auto its pilot) settles the settings the chains run with.
+    RenderSettings settings = spec_.settings;
+    if (settings.autoAlgorithm) log("planning: a pilot ranks the plan's candidates");
+    const RenderPlan plan = planJob(scene, &settings, [this] { return !cancelRequested_.load(); });
+    std::vector<std::string> planLines = plan.describe();
+    for (const std::string& line : planLines) log("plan: " + line);
+    auto renderJob = std::make_shared<RenderJob>(scene, settings, id_);
     std::optional<Image> reference = readReference(spec_.referencePath, *renderJob);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (isTerminal(phase_)) return;
       loadSeconds_ = secondsSince(loadStart, SteadyClock::now());
       warnings_ = scene->description().warnings;
+      settings_ = settings;
+      renderPlan_ = std::move(planLines);
       renderJob_ = renderJob;
       width_ = renderJob->width();
       height_ = renderJob->height();
@@ -158,6 +173,8 @@ void Job::prepare() {
       plan.height = height_;
       plan.loadSeconds = loadSeconds_;
       plan.warnings = warnings_;
+      plan.renderPlan = renderPlan_;
+      plan.plannedSettings = settings_;
       Status saved = store_->savePlan(id_, plan, secondsSince(submitted_, SteadyClock::now()));
       if (!saved.isOk()) throw std::runtime_error(saved.message());
     }
@@ -169,7 +186,7 @@ void Job::prepare() {
     renderStarted_ = SteadyClock::now();
     phase_ = JobPhase::kRendering;
     std::string z;
-    if (needsBootstrap(spec_.settings.algorithm)) {
+    if (needsBootstrap(settings_.algorithm)) {
       z = ", Z = " + std::to_string(bootstrap_.normalization) + " +- " +
           std::to_string(bootstrap_.normalizationStdError) + " from " +
           std::to_string(bootstrap_.candidates) + " candidates in " +
@@ -180,7 +197,7 @@ void Job::prepare() {
       }
     }
     log("rendering " + std::to_string(count) + " chains (" + std::to_string(width_) + "x" +
-        std::to_string(height_) + ", " + algorithmName(spec_.settings.algorithm) + z + ")");
+        std::to_string(height_) + ", " + algorithmName(settings_.algorithm) + z + ")");
     if (workFreed_) workFreed_();
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -205,6 +222,8 @@ void Job::restore(StoredJob stored) {
     height_ = stored.plan->height;
     loadSeconds_ = stored.plan->loadSeconds;
     warnings_ = stored.plan->warnings;
+    renderPlan_ = stored.plan->renderPlan;
+    if (stored.plan->plannedSettings) settings_ = *stored.plan->plannedSettings;
   }
   if (isTerminal(stored.phase)) {
     phase_ = stored.phase;
@@ -278,7 +297,7 @@ void Job::restore(StoredJob stored) {
   phase_ = JobPhase::kRendering;
   log("resumed after a restart: " + std::to_string(scheduler_->finishedCount()) + " of " +
       std::to_string(count) + " chains finished, " + std::to_string(aggregator_->workDone()) + " " +
-      (isMarkovChain(spec_.settings.algorithm) ? "mutations" : "samples") + " done (" +
+      (isMarkovChain(settings_.algorithm) ? "mutations" : "samples") + " done (" +
       std::to_string(stored.tail.size()) + " flushes replayed after the checkpoint)");
   preparer_ = std::thread([this] { loadForRestore(); });
   if (workFreed_) workFreed_();
@@ -286,8 +305,8 @@ void Job::restore(StoredJob stored) {
 
 void Job::loadForRestore() {
   try {
-    std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, spec_.settings);
-    auto renderJob = std::make_shared<RenderJob>(scene, spec_.settings, id_);
+    std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, settings_);
+    auto renderJob = std::make_shared<RenderJob>(scene, settings_, id_);
     std::optional<Image> reference = readReference(spec_.referencePath, *renderJob);
     std::lock_guard<std::mutex> lock(mutex_);
     if (isTerminal(phase_)) return;
@@ -363,7 +382,7 @@ std::vector<WorkerLease> Job::lease(const std::string& worker, int max,
     w.lease = std::move(lease);
     w.bundleHash = spec_.bundleHash;
     w.bundleScenePath = spec_.bundleScenePath;
-    w.settings = spec_.settings;
+    w.settings = settings_;
     out.push_back(std::move(w));
   }
   return out;
@@ -455,7 +474,7 @@ void Job::answerLocked(uint32_t chain, const std::string& worker, uint64_t epoch
       ack->reason = "this worker no longer holds the lease of chain " + std::to_string(chain) +
                     " (it expired, moved to another worker, or the chain finished)";
     } else if (accepted && scheduler_->waitingCount() > 0 && mutations > 0 &&
-               spec_.settings.timeBudgetSeconds > 0) {
+               settings_.timeBudgetSeconds > 0) {
       // A chain without a budget would keep its thread until the time is up, and the others
       // would never run: time-slice them at flush boundaries (the chain resumes exactly).
       ack->stop = true;
@@ -594,13 +613,13 @@ void Job::tick(SteadyClock::time_point now) {
 
 void Job::enforceBudgetLocked(SteadyClock::time_point now) {
   if (scheduler_->stopping()) return;
-  const double budget = spec_.settings.timeBudgetSeconds;
+  const double budget = settings_.timeBudgetSeconds;
   if (budget > 0 && secondsSince(submitted_, now) >= budget) {
     scheduler_->stop();
     return;
   }
   // --until-error: the estimate (never the reference: a user's job has none) has reached it.
-  const double target = spec_.settings.untilError;
+  const double target = settings_.untilError;
   if (target > 0 && !errorSeries_.empty() && errorSeries_.back().estimatedRelMse >= 0 &&
       errorSeries_.back().estimatedRelMse <= target) {
     log("the estimated relative MSE " + std::to_string(errorSeries_.back().estimatedRelMse) +
@@ -696,7 +715,7 @@ void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
     recordEndLocked();
     renderJob_.reset();  // the scene is no longer needed here (workers may still hold theirs)
     log("done in " + std::to_string(seconds) + " s, " + std::to_string(work) + " " +
-        (isMarkovChain(spec_.settings.algorithm) ? "mutations" : "samples"));
+        (isMarkovChain(settings_.algorithm) ? "mutations" : "samples"));
     endedSignal_.notify_all();
   } catch (const std::exception& e) {
     failLocked(std::string("cannot resolve the final image: ") + e.what());
@@ -723,11 +742,12 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   p.name = spec_.name;
   p.phase = phase_;
   p.error = error_;
-  p.settings = spec_.settings;
+  p.settings = settings_;
   const SteadyClock::time_point now = endedAt_ ? *endedAt_ : SteadyClock::now();
   p.elapsedSeconds = secondsSince(submitted_, now);
   p.loadSeconds = loadSeconds_;
   p.warnings = warnings_;
+  p.renderPlan = renderPlan_;
   for (const auto& [worker, why] : setAside_) p.setAside.push_back(why);
   p.bootstrapSeconds = bootstrap_.seconds;
   p.normalization = bootstrap_.normalization;
@@ -749,9 +769,8 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
     p.chainsFinished = scheduler_->finishedCount();
     p.chainsLeased = scheduler_->leasedCount();
   }
-  const ProgressEstimate estimate =
-      estimateProgress(p.workDone, p.plannedWork, spec_.settings.timeBudgetSeconds,
-                       p.elapsedSeconds, p.renderSeconds);
+  const ProgressEstimate estimate = estimateProgress(
+      p.workDone, p.plannedWork, settings_.timeBudgetSeconds, p.elapsedSeconds, p.renderSeconds);
   p.fraction = estimate.fraction;
   p.samplesPerSecond = estimate.samplesPerSecond;
   p.etaSeconds = estimate.etaSeconds;

@@ -65,11 +65,12 @@ struct JobProgress {
   JobPhase phase = JobPhase::kSubmitted;
   double fraction = 0, samplesPerSecond = 0, elapsedSeconds = 0, etaSeconds = -1;
   int64_t workDone = 0, plannedWork = 0;
-  InvalidSplats rejected;              // splats dropped at the source, by cause
-  int64_t rays = 0;                    // traced for the accepted work
-  std::vector<MutationTally> tallies;  // proposals and acceptances by kind (Markov chains)
-  std::vector<std::string> warnings;   // the scene loader's: what it left out or changed
-  std::vector<std::string> setAside;   // workers the job leases no more chains to, and why
+  InvalidSplats rejected;               // splats dropped at the source, by cause
+  int64_t rays = 0;                     // traced for the accepted work
+  std::vector<MutationTally> tallies;   // proposals and acceptances by kind (Markov chains)
+  std::vector<std::string> warnings;    // the scene loader's: what it left out or changed
+  std::vector<std::string> renderPlan;  // the scene's plan, a line each (render_plan.h)
+  std::vector<std::string> setAside;    // workers the job leases no more chains to, and why
   double raysPerSecond = 0;
   double normalization = 0, normalizationStdError = 0;
   int64_t bootstrapCandidates = 0;
@@ -129,7 +130,10 @@ class Job {
   void restore(StoredJob stored);
 
   const std::string& id() const { return id_; }
+  // As submitted: with --algorithm auto, settings.algorithm is not what renders (algorithm()).
   const JobSpec& spec() const { return spec_; }
+  // The algorithm the chains run: the submitted one, or auto's pick once the plan has it.
+  Algorithm algorithm() const;
   JobPhase phase() const;
 
   // Up to `max` chains for `worker`, if the job is rendering.
@@ -191,6 +195,9 @@ class Job {
 
   const std::string id_;
   const JobSpec spec_;
+  // spec_.settings as the plan left them (auto's algorithm, mlt's mix): what renders. Written
+  // under mutex_ by prepare() and restore(), before the job leases any chain.
+  RenderSettings settings_;
   const SteadyClock::duration leaseDuration_;
   const std::string outputDir_;
   SteadyClock::time_point submitted_;  // moved back by the time a restored job had run
@@ -218,6 +225,7 @@ class Job {
   int width_ = 0, height_ = 0;
   double loadSeconds_ = 0;
   std::vector<std::string> warnings_;
+  std::vector<std::string> renderPlan_;
   std::optional<SteadyClock::time_point> renderStarted_, endedAt_;
   std::vector<ErrorSample> errorSeries_;
   double metricsSeconds_ = 0;  // time spent computing error metrics, to keep it a small share

@@ -194,6 +194,8 @@ std::string encodePlan(const JobPlan& plan) {
   r.set_height(plan.height);
   r.set_load_seconds(plan.loadSeconds);
   for (const std::string& w : plan.warnings) r.add_warnings(w);
+  for (const std::string& line : plan.renderPlan) r.add_render_plan(line);
+  if (plan.plannedSettings) *r.mutable_planned_settings() = toProto(*plan.plannedSettings);
   return r.SerializeAsString();
 }
 
@@ -222,6 +224,12 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   }
   plan->loadSeconds = r.load_seconds();
   plan->warnings.assign(r.warnings().begin(), r.warnings().end());
+  plan->renderPlan.assign(r.render_plan().begin(), r.render_plan().end());
+  if (r.has_planned_settings()) {
+    RenderSettings settings;
+    if (!fromProto(r.planned_settings(), &settings, error)) return false;
+    plan->plannedSettings = settings;
+  }
   return true;
 }
 

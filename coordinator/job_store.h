@@ -48,6 +48,10 @@ struct JobPlan {
   int width = 0, height = 0;
   double loadSeconds = 0;
   std::vector<std::string> warnings;
+  std::vector<std::string> renderPlan;  // the plan's lines (RenderPlan::describe)
+  // The settings the plan left the job with (auto's algorithm, mlt's mix); absent in records
+  // from before plans, whose job's own settings hold.
+  std::optional<RenderSettings> plannedSettings;
 };
 
 // A job as the store remembers it.

@@ -85,6 +85,8 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_medium_march_steps(settings.mediumMarchSteps);
   m.set_until_error(settings.untilError);
   m.set_error_groups(settings.errorGroups);
+  m.set_auto_algorithm(settings.autoAlgorithm);
+  m.set_ignore_plan(settings.ignorePlan);
   return m;
 }
 
@@ -109,6 +111,8 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.mediumMarchSteps = m.medium_march_steps();
   s.untilError = m.until_error();
   s.errorGroups = m.error_groups();
+  s.autoAlgorithm = m.auto_algorithm();
+  s.ignorePlan = m.ignore_plan();
   *out = s;
   return true;
 }

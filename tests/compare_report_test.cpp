@@ -82,6 +82,55 @@ TEST(FarmCompare, RendersEachAlgorithmAndWritesTheReport) {
   EXPECT_FALSE(fs::exists(scratch / "bad"));
 }
 
+// `farm plan` on each shared scene: what it has, the algorithm, and each part left out with
+// its reason.
+TEST(FarmPlan, EachSharedSceneNamesWhatItLeavesOut) {
+  ScratchDir scratch("plan");
+  const std::string scenes = std::string(FARM_SHARED_DIR) + "/scenes/";
+  for (const std::string scene :
+       {"cornell-box/scene.xml", "veach-bidir/scene.xml", "veach-mis/scene.xml",
+        "veach-ajar/scene.pbrt", "water-caustic/scene.xml"}) {
+    CommandResult r = runCommand({FARM_CLI_BIN, "plan", scenes + scene, "--algorithm", "mlt"},
+                                 seconds(60), scratch.path());
+    ASSERT_EQ(r.exitCode, 0) << scene << ": " << r.err;
+    for (const char* what :
+         {"surfaces: ", "lights: ", "camera: pinhole", "textures: ", "environment: none",
+          "media: 0 homogeneous, 0 grid", "algorithm: mlt (requested)",
+          "mutations: bidir=", "left out: lens sampling (pinhole camera",
+          "left out: escaped-path handling (no environment", "left out: medium tracking (no media"})
+      EXPECT_NE(r.out.find(what), std::string::npos) << scene << " lacks '" << what << "':\n"
+                                                     << r.out;
+  }
+  CommandResult cornell =
+      runCommand({FARM_CLI_BIN, "plan", scenes + "cornell-box/scene.xml", "--algorithm", "mlt"},
+                 seconds(60), scratch.path());
+  EXPECT_NE(cornell.out.find("left out: manifold perturbation (no specular surfaces"),
+            std::string::npos)
+      << cornell.out;
+  EXPECT_NE(cornell.out.find("multichain=0,manifold=0"), std::string::npos) << cornell.out;
+  CommandResult water =
+      runCommand({FARM_CLI_BIN, "plan", scenes + "water-caustic/scene.xml", "--json"}, seconds(60),
+                 scratch.path());
+  ASSERT_EQ(water.exitCode, 0) << water.err;
+  const nlohmann::json j = nlohmann::json::parse(water.out);
+  EXPECT_EQ(j["algorithm"], "mlt");
+  EXPECT_EQ(j["candidates"], nlohmann::json::array({"mlt"}));
+  EXPECT_TRUE(j["automatic"].get<bool>());
+
+  CommandResult bad =
+      runCommand({FARM_CLI_BIN, "plan", scenes + "cornell-box/scene.xml", "--algorithm", "photon"},
+                 seconds(30), scratch.path());
+  EXPECT_EQ(bad.exitCode, 2);
+  EXPECT_NE(bad.err.find("or auto, not 'photon'"), std::string::npos) << bad.err;
+  CommandResult refused =
+      runCommand({FARM_CLI_BIN, "plan", std::string(FARM_TEST_DATA_DIR) + "/sky/scene.pbrt",
+                  "--algorithm", "mlt"},
+                 seconds(30), scratch.path());
+  EXPECT_EQ(refused.exitCode, 1);
+  EXPECT_NE(refused.err.find("an environment light is not supported by mlt"), std::string::npos)
+      << refused.err;
+}
+
 TEST(FarmCompare, RendersOnACoordinatorAndReportsAJob) {
   ScratchDir scratch("compare-remote");
   CoordinatorProcess coordinator(scratch.path());

@@ -340,6 +340,52 @@ INSTANTIATE_TEST_SUITE_P(Algorithms, DurableResumeTest,
                                                                      : "_log_replay");
                          });
 
+// --algorithm auto on a durable coordinator: the pilot picks once, the chains run the pick, the
+// job's progress carries the plan, and a restart goes on with the same pick and plan instead
+// of piloting again (whose figures, and perhaps pick, would differ).
+TEST(DurableResumeAuto, ARestartKeepsThePilotsPickAndThePlan) {
+  testing::ScratchDir scratch("durable-auto");
+  RenderSettings settings = smallJob(Algorithm::PSSMLT);
+  settings.autoAlgorithm = true;
+  CoordinatorOptions options;
+  options.dataDir = scratch / "data";
+  options.durable = true;
+  std::string job;
+  JobProgress before;
+  {
+    Coordinator first(options);
+    job = submitAndWait(first, settings);
+    ASSERT_TRUE(first.progress(job, 0, &before).isOk());
+    EXPECT_FALSE(before.settings.autoAlgorithm);
+    std::string plan;
+    for (const std::string& line : before.renderPlan) plan += line + "\n";
+    EXPECT_NE(plan.find("(auto)"), std::string::npos) << plan;
+    EXPECT_NE(plan.find("pilot "), std::string::npos) << plan;
+    EXPECT_NE(plan.find(std::string("algorithm: ") + algorithmName(before.settings.algorithm)),
+              std::string::npos)
+        << plan;
+    const std::string worker = registerWorker(first);
+    std::vector<WorkerLease> leases;
+    ASSERT_TRUE(first.leaseChains(worker, 8, &leases).isOk());
+    ASSERT_FALSE(leases.empty());
+    for (const WorkerLease& lease : leases)
+      EXPECT_EQ(lease.lease.spec.algorithm, before.settings.algorithm);
+  }
+  Coordinator again(options);
+  JobProgress after;
+  ASSERT_TRUE(again.progress(job, 0, &after).isOk());
+  EXPECT_EQ(after.phase, JobPhase::kRendering) << after.error;
+  EXPECT_EQ(after.settings.algorithm, before.settings.algorithm);
+  EXPECT_FALSE(after.settings.autoAlgorithm) << "the planned settings, not the submitted ones";
+  EXPECT_EQ(after.renderPlan, before.renderPlan);
+  const std::string worker = registerWorker(again);
+  std::vector<WorkerLease> leases;
+  ASSERT_TRUE(again.leaseChains(worker, 8, &leases).isOk());
+  ASSERT_FALSE(leases.empty());
+  for (const WorkerLease& lease : leases)
+    EXPECT_EQ(lease.lease.spec.algorithm, before.settings.algorithm);
+}
+
 // Every fault counts once (issue 8): a late flush from a worker whose lease moved on is the
 // chain's next flush or a duplicate, never a second copy, and its sender is told to stop;
 // whichever of the two workers delivers first, the image is the uninterrupted run's.

@@ -202,6 +202,43 @@ TEST(EmbeddedRender, SceneWarningsReachTheReport) {
 
 // --until-error: the job stops once the error estimated from its chain groups is there,
 // long before its budget, and says so; the report's CSV carries the estimate with no reference.
+// --algorithm auto: the pilot takes about a tenth of the budget, the job renders with its pick,
+// and the report says what the plan chose and why.
+TEST(EmbeddedRender, AutoRendersWithThePilotsPickAndReportsThePlan) {
+  EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 2, 1);
+  o.settings.autoAlgorithm = true;
+  o.settings.bootstrapSamples = 0;
+  o.settings.timeBudgetSeconds = 4;
+  EmbeddedRenderResult result;
+  Status s = renderEmbedded(o, &result);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  const JobProgress& p = result.progress;
+  EXPECT_EQ(p.phase, JobPhase::kDone);
+  EXPECT_FALSE(p.settings.autoAlgorithm);
+  EXPECT_GT(p.workDone, 0);
+  const std::string report = finalReport(p, o.scenePath, "");
+  EXPECT_NE(report.find("  plan:\n"), std::string::npos) << report;
+  EXPECT_NE(
+      report.find(std::string("algorithm: ") + algorithmName(p.settings.algorithm) + " (auto)"),
+      std::string::npos)
+      << report;
+  // Each candidate's pilot, with its figures (the Cornell box has four).
+  size_t pilots = 0;
+  for (const std::string& line : p.renderPlan) pilots += line.find("  pilot ") == 0;
+  EXPECT_EQ(pilots, 4u) << report;
+  EXPECT_NE(report.find("left out: lens sampling (pinhole camera"), std::string::npos) << report;
+  // The pilot took its share (10% of 4 s, 0.25 s a candidate) before the render, inside the
+  // budget.
+  EXPECT_GT(p.elapsedSeconds - p.renderSeconds, 0.9);
+  EXPECT_LT(p.elapsedSeconds, 6.0);
+  EXPECT_EQ(result.metadata.at("farm:algorithm"), algorithmName(p.settings.algorithm));
+
+  // What it cannot do, said before anything runs.
+  RenderSettings bad = o.settings;
+  bad.ignorePlan = true;
+  EXPECT_NE(bad.validate().find("--no-plan"), std::string::npos);
+}
+
 TEST(EmbeddedRender, UntilErrorStopsOnceTheEstimateIsThere) {
   EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 2, 1);
   o.settings.width = o.settings.height = 64;

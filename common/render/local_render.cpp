@@ -31,6 +31,7 @@ LocalRenderResult renderLocally(const RenderJob& job) {
         sum.accepted += t.accepted;
       }
       result.work += f.mutations;
+      result.rays += f.rays;
       result.rejected += f.rejected;
       if (budget > 0) {
         double elapsed =

@@ -16,6 +16,7 @@ struct LocalRenderResult {
   Image image;
   BootstrapResult bootstrap;
   int64_t work = 0;        // mutations or samples
+  int64_t rays = 0;        // traced for that work
   InvalidSplats rejected;  // splats dropped at the source, by cause
   double seconds = 0;
   // Per chain (work unit), the sum of each channel over all its splats: the units are

@@ -13,6 +13,7 @@
 #include "common/mcmc/erpt.h"
 #include "common/mcmc/mlt_chain.h"
 #include "common/mcmc/pssmlt_chain.h"
+#include "common/plan/scene_analysis.h"
 #include "common/scene/film_override.h"
 #include "common/scene/loaders/scene_loader.h"
 #include "common/scene/scene.h"
@@ -407,41 +408,10 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
 
 std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& settings) {
   SceneDescription desc = loadSceneDescription(path);
-  // Path-space MLT and ERPT mutate paths with the camera vertex held where their seed put it:
-  // with a lens, the lens point would never move and the chains would not be ergodic.
-  if (desc.camera.lensRadius > 0 &&
-      (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
-    throw SceneLoadError(path, 0,
-                         std::string("a thin lens camera is not supported by ") +
-                             algorithmName(settings.algorithm) +
-                             " yet (its mutations keep each seed's lens point): use pt, bdpt, "
-                             "pssmlt, pssmlt-pt or mmlt");
-  }
-  // Their path-space mutations build and perturb vertices at finite points only; a path from
-  // the environment (a vertex at infinity) is not one of theirs yet.
-  if (desc.environment.present &&
-      (settings.algorithm == Algorithm::MLT || settings.algorithm == Algorithm::ERPT)) {
-    throw SceneLoadError(path, 0,
-                         std::string("an environment light is not supported by ") +
-                             algorithmName(settings.algorithm) +
-                             " yet (its mutations build paths from lights at finite points "
-                             "only): use pt, bdpt, pssmlt, pssmlt-pt or mmlt");
-  }
-  // Participating media: path tracing and BDPT track them (and the primary-sample-space chains
-  // over them, which draw the same paths), path-space MLT's chains have vertices in them. ERPT
-  // takes homogeneous media, where path tracing's seed values are f / p exactly; through a grid
-  // its chains would start from path tracing's estimate of a transmittance instead of their
-  // own, a start that is not their stationary distribution.
-  bool grid = false;
-  for (const MediumDescription& m : desc.media)
-    grid = grid || m.type == MediumDescription::Type::Grid;
-  if (grid && settings.algorithm == Algorithm::ERPT) {
-    throw SceneLoadError(path, 0,
-                         std::string("density grids are not supported by ") +
-                             algorithmName(settings.algorithm) +
-                             " yet (homogeneous media are): use pt, bdpt, pssmlt, pssmlt-pt, mmlt "
-                             "or mlt");
-  }
+  // With auto the plan picks among the algorithms that can render it.
+  const std::string refusal =
+      settings.autoAlgorithm ? "" : algorithmRefusal(desc, settings.algorithm);
+  if (!refusal.empty()) throw SceneLoadError(path, 0, refusal);
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);
   }

@@ -47,6 +47,8 @@ std::string RenderSettings::validate() const {
     err << "--until-error must be a relative MSE >= 0 (0: none), not " << untilError;
   } else if (errorGroups < 0 || errorGroups > 64) {
     err << "--error-groups must be in 0..64 (0: the default), not " << errorGroups;
+  } else if (autoAlgorithm && ignorePlan) {
+    err << "--algorithm auto is the plan's choice: it cannot go with --no-plan";
   } else if (errorGroups == 1 && untilError > 0) {
     err << "--until-error needs an error estimate, which --error-groups 1 turns off";
   }

@@ -9,6 +9,13 @@ namespace farm {
 
 struct RenderSettings {
   Algorithm algorithm = Algorithm::PSSMLT;
+  // --algorithm auto: the coordinator picks the algorithm by the scene's plan and a short pilot
+  // of its candidates (common/render/algorithm_pilot.h), then renders with it; `algorithm` is
+  // ignored until then, and holds the pick after.
+  bool autoAlgorithm = false;
+  // --no-plan: render with every part the settings name, even those the scene's plan leaves out
+  // (mlt's mutations for specular chains on a scene without any): what measures the saving.
+  bool ignorePlan = false;
   int width = 0, height = 0;       // 0: the scene's film; one of them 0: keep the aspect ratio
   int64_t samplesPerPixel = 16;    // pt, bdpt
   int64_t mutationsPerPixel = 16;  // pssmlt

@@ -1,0 +1,74 @@
+#pragma once
+// The render a scene implies (DESIGN.md, "Leave out what a scene does not need"): which
+// algorithm, which of path-space MLT's mutations with which weights, and each path-space part
+// either in or left out, with the reason. `farm plan SCENE` prints it; every job carries it in
+// its report. A part left out is gone from the code path: mlt's mutations by a zero weight, which
+// PathChain::select skips before asking whether the mutation applies; the others by the scene's
+// own data, which the code they name tests first (Camera::hasLens, Scene::bsdfAt's texture
+// index, Scene::environment, Scene::hasMedia, ManifoldNextEvent::active).
+//
+// With --algorithm auto the plan also names the candidates a short pilot ranks
+// (common/render/algorithm_pilot.h). The pilot's yardstick, the reference-free error estimate,
+// sees noise but not bias, so the analysis decides which algorithms may compete at all: where
+// light arrives along specular-diffuse-specular paths that only manifold walks connect, the
+// others' pilots would look good by missing that light, and path-space MLT is the only
+// candidate.
+#include <string>
+#include <vector>
+
+#include "common/chain/algorithm.h"
+#include "common/plan/scene_analysis.h"
+
+namespace farm {
+
+struct PlanPart {
+  std::string name;  // "caustic perturbation", "lens sampling", ...
+  bool enabled = true;
+  std::string reason;
+};
+
+// One candidate's pilot: its render seconds (after its bootstrap) and the relative MSE its
+// chain groups' spread estimated; score = relMSE x seconds, the error one second of it would
+// leave (relative MSE falls as 1 / time), lower is better.
+struct PilotFigure {
+  Algorithm algorithm = Algorithm::PathTracing;
+  double seconds = 0;
+  double bootstrapSeconds = 0;
+  double estimatedRelMse = -1;  // < 0: none (failure says why)
+  double score = -1;
+  std::string failure;
+};
+
+struct RenderPlan {
+  SceneAnalysis scene;
+  Algorithm algorithm = Algorithm::PSSMLT;  // what the job renders with
+  bool automatic = false;                   // chosen by the plan (--algorithm auto)
+  bool applied = true;                      // false: --no-plan, every part the settings name
+  // --algorithm auto: the candidates the pilot ranks, and why the others are not among them.
+  std::vector<Algorithm> shortlist;
+  std::vector<std::string> notShortlisted;
+  std::string why;          // why this algorithm, or this shortlist
+  MutationMix mutationMix;  // mlt's, with the parts left out at zero weight
+  std::vector<PlanPart> parts;
+  std::vector<PilotFigure> pilot;  // filled by the pilot, best score first
+
+  // Sets the algorithm and the parts that follow from it (the mutations are mlt's).
+  void choose(Algorithm chosen);
+  // What `farm plan` prints and every report carries, a line each, no newlines.
+  std::vector<std::string> describe() const;
+};
+
+// The plan for rendering with `requested` (ignored when automatic: the analysis picks the
+// shortlist and, until a pilot ranks it, its first entry) and mlt's `requestedMix`.
+RenderPlan planRender(const SceneAnalysis& scene, Algorithm requested, bool automatic,
+                      const MutationMix& requestedMix);
+
+// The mix with the mutations a scene without specular surfaces never uses at zero weight: the
+// multi-chain perturbation and the manifold walks move specular chains (Veach 1997, 11.4.4;
+// Jakob and Marschner 2012), which no path of such a scene has, and at zero weight
+// PathChain::select does not even ask whether they apply: the chain, and the image, are the
+// same, less the asking. The caustic perturbation stays (render_plan.cpp says why).
+// Unchanged for scenes with specular surfaces.
+MutationMix plannedMutationMix(const SceneAnalysis& scene, const MutationMix& requested);
+
+}  // namespace farm

@@ -1,0 +1,154 @@
+// The plan of each shared scene and of the test scenes with a lens, an environment and media:
+// what the analysis finds, the candidates auto's pilot may rank, and each part in or left out
+// with its reason.
+#include "common/plan/render_plan.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+#include "common/render/render_job.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+namespace {
+
+const std::string kShared = FARM_SHARED_DIR;
+const std::string kTestData = FARM_TEST_DATA_DIR;
+
+RenderPlan plan(const std::string& path, Algorithm algorithm, bool automatic) {
+  RenderSettings settings;
+  settings.autoAlgorithm = true;  // load whatever the scene has
+  std::shared_ptr<Scene> scene = loadScene(path, settings);
+  return planRender(analyseScene(*scene), algorithm, automatic, MutationMix());
+}
+
+const PlanPart& part(const RenderPlan& p, const std::string& name) {
+  for (const PlanPart& part : p.parts)
+    if (part.name == name) return part;
+  ADD_FAILURE() << "no part " << name;
+  static const PlanPart none;
+  return none;
+}
+
+bool candidate(const RenderPlan& p, Algorithm a) {
+  return std::find(p.shortlist.begin(), p.shortlist.end(), a) != p.shortlist.end();
+}
+
+// Every line of the plan that leaves a part out names it and says why.
+void expectNamedLeftOuts(const RenderPlan& p, const std::string& scene) {
+  size_t leftOut = 0;
+  for (const std::string& line : p.describe()) {
+    if (line.find("left out: ") == std::string::npos) continue;
+    ++leftOut;
+    EXPECT_NE(line.find(" ("), std::string::npos) << scene << ": no reason in '" << line << "'";
+  }
+  size_t parts = 0;
+  for (const PlanPart& part : p.parts) parts += !part.enabled;
+  EXPECT_EQ(leftOut, parts) << scene;
+  EXPECT_GT(leftOut, 0u) << scene << ": every shared scene lacks something";
+}
+
+TEST(RenderPlan, CornellBoxIsDiffuseUnderOneLargeLight) {
+  const std::string path = kShared + "/scenes/cornell-box/scene.xml";
+  const RenderPlan p = plan(path, Algorithm::MLT, false);
+  EXPECT_EQ(p.scene.specularShapes, 0);
+  EXPECT_EQ(p.scene.diffuseShapes, 8);
+  ASSERT_EQ(p.scene.lights.size(), 1u);
+  EXPECT_FALSE(p.scene.smallLights);
+  EXPECT_FALSE(p.scene.specularDiffuseSpecular());
+  // mlt's mutations for specular chains are left out, and at zero weight; the caustic
+  // perturbation stays (it moves D D E paths too).
+  EXPECT_FALSE(part(p, "multi-chain perturbation").enabled);
+  EXPECT_NE(part(p, "multi-chain perturbation").reason.find("no specular surfaces"),
+            std::string::npos);
+  EXPECT_FALSE(part(p, "manifold perturbation").enabled);
+  EXPECT_EQ(p.mutationMix.multiChainPerturbation, 0);
+  EXPECT_EQ(p.mutationMix.manifoldPerturbation, 0);
+  EXPECT_TRUE(part(p, "caustic perturbation").enabled);
+  EXPECT_EQ(p.mutationMix.causticPerturbation, MutationMix().causticPerturbation);
+  EXPECT_FALSE(part(p, "manifold next-event estimation").enabled);
+  EXPECT_FALSE(part(p, "lens sampling").enabled);
+  EXPECT_FALSE(part(p, "texture lookups").enabled);
+  EXPECT_FALSE(part(p, "escaped-path handling").enabled);
+  EXPECT_FALSE(part(p, "medium tracking").enabled);
+  expectNamedLeftOuts(p, path);
+
+  const RenderPlan automatic = plan(path, Algorithm::PSSMLT, true);
+  EXPECT_TRUE(candidate(automatic, Algorithm::Bidirectional));
+  EXPECT_TRUE(candidate(automatic, Algorithm::PathTracing));
+  EXPECT_FALSE(candidate(automatic, Algorithm::MLT)) << "nothing specular or glossy to follow";
+}
+
+TEST(RenderPlan, WaterCausticIsSpecularDiffuseSpecularAndOnlyMltMayRenderIt) {
+  const std::string path = kShared + "/scenes/water-caustic/scene.xml";
+  const RenderPlan p = plan(path, Algorithm::PSSMLT, true);
+  EXPECT_EQ(p.scene.specularShapes, 2);
+  EXPECT_TRUE(p.scene.smallLights);
+  EXPECT_GT(p.scene.specularSeen, 0.5);
+  EXPECT_GT(p.scene.specularLit, 0.5);
+  EXPECT_TRUE(p.scene.specularDiffuseSpecular());
+  ASSERT_EQ(p.shortlist.size(), 1u);
+  EXPECT_EQ(p.shortlist[0], Algorithm::MLT);
+  EXPECT_EQ(p.algorithm, Algorithm::MLT);
+  EXPECT_TRUE(part(p, "manifold perturbation").enabled);
+  EXPECT_TRUE(part(p, "multi-chain perturbation").enabled);
+  EXPECT_TRUE(part(p, "manifold next-event estimation").enabled);
+  EXPECT_EQ(p.mutationMix, MutationMix());
+  expectNamedLeftOuts(p, path);
+}
+
+TEST(RenderPlan, VeachBidirHasGlassButNoSpecularDiffuseSpecularLight) {
+  const std::string path = kShared + "/scenes/veach-bidir/scene.xml";
+  const RenderPlan p = plan(path, Algorithm::PSSMLT, true);
+  EXPECT_GT(p.scene.specularShapes, 0);
+  EXPECT_GT(p.scene.glossyShapes, 0);
+  EXPECT_EQ(p.scene.lights.size(), 2u);
+  EXPECT_FALSE(p.scene.specularDiffuseSpecular());
+  EXPECT_TRUE(candidate(p, Algorithm::MLT));
+  EXPECT_TRUE(candidate(p, Algorithm::Bidirectional));
+  EXPECT_FALSE(candidate(p, Algorithm::ERPT));
+  expectNamedLeftOuts(p, path);
+}
+
+TEST(RenderPlan, VeachMisAndAjar) {
+  const std::string mis = kShared + "/scenes/veach-mis/scene.xml";
+  const RenderPlan m = plan(mis, Algorithm::MLT, false);
+  EXPECT_EQ(m.scene.specularShapes, 0);
+  EXPECT_EQ(m.scene.glossyShapes, 4);
+  EXPECT_EQ(m.scene.lights.size(), 3u);
+  EXPECT_FALSE(part(m, "manifold perturbation").enabled);
+  expectNamedLeftOuts(m, mis);
+
+  const std::string ajar = kShared + "/scenes/veach-ajar/scene.pbrt";
+  const RenderPlan a = plan(ajar, Algorithm::Bidirectional, false);
+  EXPECT_GT(a.scene.texturedBsdfs, 0);
+  EXPECT_TRUE(part(a, "texture lookups").enabled);
+  EXPECT_FALSE(part(a, "lens sampling").enabled);
+  expectNamedLeftOuts(a, ajar);
+}
+
+TEST(RenderPlan, ALensAnEnvironmentAndMediaAreInAndNarrowTheCandidates) {
+  const RenderPlan lens = plan(kTestData + "/thin-lens/scene.pbrt", Algorithm::PSSMLT, true);
+  EXPECT_TRUE(lens.scene.thinLens);
+  EXPECT_TRUE(part(lens, "lens sampling").enabled);
+  EXPECT_FALSE(candidate(lens, Algorithm::MLT)) << "mlt refuses a thin lens";
+  bool named = false;
+  for (const std::string& n : lens.notShortlisted)
+    named = named || n.rfind("mlt: a thin lens", 0) == 0;
+  EXPECT_TRUE(named) << "the refusal is the reason";
+
+  const RenderPlan sky = plan(kTestData + "/sky/scene.pbrt", Algorithm::PSSMLT, true);
+  EXPECT_TRUE(sky.scene.environment);
+  EXPECT_TRUE(part(sky, "escaped-path handling").enabled);
+  EXPECT_FALSE(candidate(sky, Algorithm::MLT));
+
+  const RenderPlan smoke = plan(kTestData + "/smoke-room/scene.xml", Algorithm::PSSMLT, true);
+  EXPECT_GT(smoke.scene.gridMedia, 0);
+  EXPECT_TRUE(part(smoke, "medium tracking").enabled);
+  EXPECT_FALSE(candidate(smoke, Algorithm::ERPT));
+}
+
+}  // namespace
+}  // namespace farm

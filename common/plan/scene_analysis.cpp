@@ -1,0 +1,212 @@
+#include "common/plan/scene_analysis.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/sampling/rng.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+
+namespace {
+
+double shapeArea(const ShapeDescription& s) {
+  if (s.type == ShapeDescription::Type::Sphere) return 4 * M_PI * double(s.radius) * s.radius;
+  double area = 0;
+  for (size_t t = 0; t + 2 < s.indices.size(); t += 3) {
+    const Vec3f& a = s.positions[s.indices[t]];
+    area +=
+        0.5 *
+        double(length(cross(s.positions[s.indices[t + 1]] - a, s.positions[s.indices[t + 2]] - a)));
+  }
+  return area;
+}
+
+// Whether the first surface a ray meets is specular (and -1 when it meets none).
+int firstHitSpecular(const Scene& scene, const Ray& ray) {
+  SurfaceHit hit;
+  if (!scene.intersect(ray, &hit)) return -1;
+  return scene.bsdfOf(hit.shape).isDelta() ? 1 : 0;
+}
+
+// The probes see the scene's geometry only (no media, no visibility of the environment): they
+// tell where specular surfaces sit relative to the camera and the lights.
+constexpr int kProbeRays = 4096;
+
+double probeCamera(const Scene& scene) {
+  const Camera& camera = scene.camera();
+  const int side = int(std::sqrt(double(kProbeRays)));
+  int hits = 0, specular = 0;
+  for (int j = 0; j < side; ++j) {
+    for (int i = 0; i < side; ++i) {
+      const Vec2f film((float(i) + 0.5f) / float(side) * float(camera.width()),
+                       (float(j) + 0.5f) / float(side) * float(camera.height()));
+      const int s = firstHitSpecular(scene, camera.generateRay(film));
+      hits += s >= 0;
+      specular += s > 0;
+    }
+  }
+  return hits > 0 ? double(specular) / hits : 0;
+}
+
+double probeLights(const Scene& scene) {
+  if (scene.lights().empty()) return 0;
+  Rng rng(1, 0x9e3779b97f4a7c15ull);
+  int hits = 0, specular = 0;
+  for (int k = 0; k < kProbeRays; ++k) {
+    float pdf = 0;
+    const int light = scene.pickLight(rng.nextFloat(), &pdf);
+    const AreaLight& l = scene.lights()[size_t(light)];
+    if (l.isEnvironment()) continue;
+    Vec3f p, n, w;
+    if (l.isPoint()) {
+      p = scene.pointLight(light).position();
+      w = scene.pointLight(light).sampleDirection(Vec2f(rng.nextFloat(), rng.nextFloat()), &pdf);
+      n = Vec3f(0.0f);
+    } else {
+      const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+      scene.sampleLightPoint(light, u, &p, &n);
+      w = Frame(n).toWorld(scene.sampleEmission(light, Vec2f(rng.nextFloat(), rng.nextFloat())));
+    }
+    if (!(pdf > 0) && l.isPoint()) continue;
+    const int s = firstHitSpecular(scene, l.isPoint() ? Ray{p, w} : scene.spawnRay(p, n, w));
+    hits += s >= 0;
+    specular += s > 0;
+  }
+  return hits > 0 ? double(specular) / hits : 0;
+}
+
+}  // namespace
+
+const char* lightKindName(LightSummary::Kind k) {
+  switch (k) {
+    case LightSummary::Kind::Area:
+      return "area";
+    case LightSummary::Kind::Point:
+      return "point";
+    case LightSummary::Kind::Spot:
+      return "spot";
+    case LightSummary::Kind::Environment:
+      return "environment";
+  }
+  return "?";
+}
+
+bool SceneAnalysis::specularDiffuseSpecular() const {
+  // A few percent each way: a glass object on a table is seen and lit through by a sliver of
+  // rays; a pool's surface covers much of both views.
+  return hasSpecular() && smallLights && specularSeen >= 0.05 && specularLit >= 0.05;
+}
+
+SceneAnalysis analyseScene(const Scene& scene) {
+  const SceneDescription& d = scene.description();
+  SceneAnalysis a;
+  for (size_t i = 0; i < d.shapes.size(); ++i) {
+    const ShapeDescription& s = d.shapes[i];
+    if (s.bsdf < 0 || s.nullBoundary) continue;
+    const BsdfDescription& b = d.bsdfs[size_t(s.bsdf)];
+    const double area = shapeArea(s);
+    using T = BsdfDescription::Type;
+    if (scene.bsdfOf(int(i)).isDelta()) {
+      ++a.specularShapes;
+      a.specularArea += area;
+    } else if (b.type != T::Diffuse && b.alpha <= kGlossyAlpha) {
+      ++a.glossyShapes;
+      a.glossyArea += area;
+    } else {
+      ++a.diffuseShapes;
+      a.diffuseArea += area;
+    }
+  }
+  for (const BsdfDescription& b : d.bsdfs) a.texturedBsdfs += b.reflectanceTexture >= 0;
+
+  const double diameter = 2.0 * double(scene.extent());
+  double total = 0;
+  a.smallLights = true;
+  for (size_t k = 0; k < scene.lights().size(); ++k) {
+    const AreaLight& l = scene.lights()[k];
+    LightSummary s;
+    s.power = double(l.power);
+    total += s.power;
+    if (l.isEnvironment()) {
+      s.kind = LightSummary::Kind::Environment;
+      s.origin = d.environment.origin;
+      a.smallLights = false;
+    } else if (l.isPoint()) {
+      const PointLightDescription& p = d.pointLights[size_t(l.point)];
+      s.kind = p.spot ? LightSummary::Kind::Spot : LightSummary::Kind::Point;
+      s.origin = p.origin;
+    } else {
+      s.kind = LightSummary::Kind::Area;
+      s.origin = d.shapes[size_t(l.shape)].origin;
+      s.area = double(l.area);
+      s.size = std::sqrt(s.area) / diameter;
+      a.smallLights = a.smallLights && s.size < kSmallLight;
+    }
+    a.lights.push_back(s);
+  }
+  if (a.lights.empty()) a.smallLights = false;
+  for (LightSummary& s : a.lights) s.share = total > 0 ? s.power / total : 0;
+
+  a.lensRadius = d.camera.lensRadius;
+  a.thinLens = d.camera.lensRadius > 0;
+  a.environment = d.environment.present;
+  a.environmentMap = d.environment.present && d.environment.image != nullptr;
+  for (const MediumDescription& m : d.media) {
+    if (m.type == MediumDescription::Type::Grid) {
+      ++a.gridMedia;
+    } else {
+      ++a.homogeneousMedia;
+    }
+  }
+  a.maxDepth = d.maxDepth;
+  if (a.hasSpecular()) {
+    a.specularSeen = probeCamera(scene);
+    a.specularLit = probeLights(scene);
+    a.probeRays = 2 * kProbeRays;
+  }
+  for (Algorithm algorithm : allAlgorithms()) {
+    std::string why = algorithmRefusal(d, algorithm);
+    if (why.empty()) {
+      a.usable.push_back(algorithm);
+    } else {
+      a.refused.emplace_back(algorithm, std::move(why));
+    }
+  }
+  return a;
+}
+
+std::string algorithmRefusal(const SceneDescription& desc, Algorithm algorithm) {
+  const bool pathSpace = algorithm == Algorithm::MLT || algorithm == Algorithm::ERPT;
+  const std::string name = algorithmName(algorithm);
+  // Path-space MLT and ERPT mutate paths with the camera vertex held where their seed put it:
+  // with a lens, the lens point would never move and the chains would not be ergodic.
+  if (pathSpace && desc.camera.lensRadius > 0) {
+    return "a thin lens camera is not supported by " + name +
+           " yet (its mutations keep each seed's lens point): use pt, bdpt, pssmlt, pssmlt-pt "
+           "or mmlt";
+  }
+  // Their path-space mutations build and perturb vertices at finite points only; a path from
+  // the environment (a vertex at infinity) is not one of theirs yet.
+  if (pathSpace && desc.environment.present) {
+    return "an environment light is not supported by " + name +
+           " yet (its mutations build paths from lights at finite points only): use pt, bdpt, "
+           "pssmlt, pssmlt-pt or mmlt";
+  }
+  // Participating media: path tracing and BDPT track them (and the primary-sample-space chains
+  // over them, which draw the same paths), path-space MLT's chains have vertices in them. ERPT
+  // takes homogeneous media, where path tracing's seed values are f / p exactly; through a grid
+  // its chains would start from path tracing's estimate of a transmittance instead of their
+  // own, a start that is not their stationary distribution.
+  if (algorithm == Algorithm::ERPT) {
+    for (const MediumDescription& m : desc.media) {
+      if (m.type == MediumDescription::Type::Grid) {
+        return "density grids are not supported by " + name +
+               " yet (homogeneous media are): use pt, bdpt, pssmlt, pssmlt-pt, mmlt or mlt";
+      }
+    }
+  }
+  return "";
+}
+
+}  // namespace farm

@@ -1,0 +1,172 @@
+#include "common/render/algorithm_pilot.h"
+
+#include <algorithm>
+#include <chrono>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "common/film/batch_means.h"
+#include "common/render/render_job.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// The pilot's chains: one group each, each on a thread of its own so that every group gets
+// the same share of the machine however few cores it has (a pool would run the first chains
+// to the deadline and the rest not at all).
+constexpr int kPilotGroups = 4;
+
+PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings, double seconds,
+                     const std::function<bool()>& keepGoing) {
+  PilotFigure figure;
+  figure.algorithm = settings.algorithm;
+  settings.autoAlgorithm = false;
+  settings.timeBudgetSeconds = seconds;
+  settings.untilError = 0;
+  settings.errorGroups = kPilotGroups;
+  settings.numChains = kPilotGroups;
+  settings.bootstrapSamples = 0;
+  // Flush often: the deadline is looked at only between flushes.
+  settings.flushInterval = 1024;
+  const auto start = Clock::now();
+  try {
+    RenderJob job(scene, settings, "pilot");
+    BootstrapResult bootstrap =
+        job.bootstrap([&](const Progress&) { return !keepGoing || keepGoing(); });
+    figure.bootstrapSeconds = since(start);
+    std::vector<ChainSpec> specs = job.planChains(bootstrap);
+    const size_t size = size_t(job.width()) * job.height() * 3;
+    const int groups = kPilotGroups;
+    std::vector<std::vector<double>> sums(groups, std::vector<double>(size, 0.0));
+    std::vector<int64_t> work(groups, 0);
+    std::mutex mutex;
+    std::atomic<bool> stop{false};
+    std::string failure;
+    const auto renderStart = Clock::now();
+    std::vector<std::thread> threads;
+    for (const ChainSpec& spec : specs) {
+      threads.emplace_back([&, spec] {
+        try {
+          job.runChain(spec, [&](ChainFlush&& f) {
+            {
+              std::lock_guard<std::mutex> lock(mutex);
+              std::vector<double>& s = sums[spec.errorGroup % groups];
+              for (size_t k = 0; k < size && k < f.splats.size(); ++k) s[k] += f.splats[k];
+              work[spec.errorGroup % groups] += f.mutations;
+            }
+            if (since(start) >= seconds || (keepGoing && !keepGoing())) stop = true;
+            return !stop.load();
+          });
+        } catch (const std::exception& e) {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (failure.empty()) failure = e.what();
+          stop = true;
+        }
+      });
+    }
+    for (std::thread& t : threads) t.join();
+    figure.seconds = since(renderStart);
+    if (!failure.empty()) throw std::runtime_error(failure);
+    if (keepGoing && !keepGoing()) throw std::runtime_error("cancelled");
+    std::vector<double> total(size, 0.0);
+    int64_t totalWork = 0;
+    std::vector<Image> images;
+    std::vector<double> groupWork;
+    for (int g = 0; g < groups; ++g) {
+      if (work[g] <= 0) throw std::runtime_error("a chain group did no work in the pilot");
+      for (size_t k = 0; k < size; ++k) total[k] += sums[g][k];
+      totalWork += work[g];
+      images.push_back(job.resolve(sums[g], job.imageScale(bootstrap, work[g])));
+      groupWork.push_back(double(work[g]));
+    }
+    const Image image = job.resolve(total, job.imageScale(bootstrap, totalWork));
+    const double z = bootstrap.normalization;
+    const double zRel =
+        z > 0 ? (bootstrap.normalizationStdError / z) * (bootstrap.normalizationStdError / z) : 0.0;
+    ErrorEstimate estimate;
+    std::string error;
+    if (!estimateError(images, groupWork, image, zRel, &estimate, &error))
+      throw std::runtime_error(error);
+    figure.estimatedRelMse = estimate.relMse;
+    figure.score = estimate.relMse * figure.seconds;
+  } catch (const std::exception& e) {
+    figure.estimatedRelMse = -1;
+    figure.score = -1;
+    figure.failure = e.what();
+  }
+  return figure;
+}
+
+}  // namespace
+
+double pilotSecondsEach(const RenderSettings& settings, size_t candidates) {
+  if (candidates == 0) return 0;
+  const double each = settings.timeBudgetSeconds > 0
+                          ? kPilotShare * settings.timeBudgetSeconds / double(candidates)
+                          : kPilotSecondsWithoutBudget;
+  return std::clamp(each, kPilotMinSeconds, kPilotMaxSeconds);
+}
+
+std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
+                                  const RenderSettings& settings,
+                                  const std::vector<Algorithm>& candidates, double seconds,
+                                  const std::function<bool()>& keepGoing) {
+  std::vector<PilotFigure> figures;
+  for (Algorithm a : candidates) {
+    if (keepGoing && !keepGoing()) break;
+    RenderSettings s = settings;
+    s.algorithm = a;
+    figures.push_back(pilotOne(scene, s, seconds, keepGoing));
+  }
+  std::stable_sort(figures.begin(), figures.end(), [](const PilotFigure& a, const PilotFigure& b) {
+    const bool aOk = a.score >= 0, bOk = b.score >= 0;
+    if (aOk != bOk) return aOk;
+    return aOk && a.score < b.score;
+  });
+  return figures;
+}
+
+RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
+                   const std::function<bool()>& keepGoing) {
+  const SceneAnalysis analysis = analyseScene(*scene);
+  RenderPlan plan =
+      planRender(analysis, settings->algorithm, settings->autoAlgorithm, settings->mutationMix);
+  if (settings->autoAlgorithm) {
+    if (plan.shortlist.empty())
+      throw std::runtime_error("no algorithm of this build can render this scene");
+    if (plan.shortlist.size() > 1) {
+      const double seconds = pilotSecondsEach(*settings, plan.shortlist.size());
+      RenderSettings pilot = *settings;
+      pilot.mutationMix = plan.mutationMix;
+      plan.pilot = runPilot(scene, pilot, plan.shortlist, seconds, keepGoing);
+      if (keepGoing && !keepGoing()) throw std::runtime_error("cancelled");
+      if (plan.pilot.empty() || plan.pilot.front().score < 0) {
+        std::string why = plan.pilot.empty() ? "no candidate ran" : plan.pilot.front().failure;
+        throw std::runtime_error("the pilot found no algorithm that renders this scene (" + why +
+                                 ")");
+      }
+      plan.choose(plan.pilot.front().algorithm);
+    }
+    settings->algorithm = plan.algorithm;
+    settings->autoAlgorithm = false;
+  }
+  if (settings->ignorePlan) {
+    plan.applied = false;
+    plan.mutationMix = settings->mutationMix;
+    plan.choose(plan.algorithm);
+  } else {
+    settings->mutationMix = plan.mutationMix;
+  }
+  return plan;
+}
+
+}  // namespace farm

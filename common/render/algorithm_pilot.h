@@ -1,0 +1,45 @@
+#pragma once
+// Planning a job (common/plan/render_plan.h) and, for --algorithm auto, the pilot that ranks
+// the plan's candidates: each renders for a few seconds in this process, its chains in
+// independent groups whose spread estimates its relative MSE without a reference
+// (common/film/batch_means.h), and the candidate whose estimate times its render time is least
+// renders the job. Relative MSE falls as 1 / time for every algorithm here, so that product is
+// what one second of the candidate would leave: a pilot of equal seconds each ranks them as
+// the job would, up to the pilot's noise. The bootstrap's own time is left out of the product:
+// in the job it is a few percent (common/mcmc/bootstrap_size.h), in a pilot of a second it can
+// be most of it.
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "common/plan/render_plan.h"
+#include "common/render/render_settings.h"
+
+namespace farm {
+
+class Scene;
+
+// The share of a job's time budget the pilot may take, and its seconds per candidate without
+// a budget (a job of counts) and the bounds either way.
+constexpr double kPilotShare = 0.1;
+constexpr double kPilotSecondsWithoutBudget = 1.0;
+constexpr double kPilotMinSeconds = 0.25, kPilotMaxSeconds = 5.0;
+
+double pilotSecondsEach(const RenderSettings& settings, size_t candidates);
+
+// Renders each candidate for `seconds` (its bootstrap included) and returns their figures,
+// best score first; a candidate that fails (no light, cancelled) has a failure and sorts
+// last. Stops early, returning what it has, when keepGoing returns false.
+std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
+                                  const RenderSettings& settings,
+                                  const std::vector<Algorithm>& candidates, double seconds,
+                                  const std::function<bool()>& keepGoing = {});
+
+// The job's plan, applied to *settings: with settings->autoAlgorithm the algorithm the plan
+// (and its pilot, where it has more than one candidate) picks; unless settings->ignorePlan,
+// mlt's mutation mix with the parts the scene does not need at zero weight.
+RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
+                   const std::function<bool()>& keepGoing = {});
+
+}  // namespace farm

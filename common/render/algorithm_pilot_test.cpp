@@ -1,0 +1,108 @@
+// Planning a job: the parts a plan leaves out change nothing but the asking (the same chain,
+// the same image, the same rays), auto takes the plan's only candidate where there is one,
+// and the pilot ranks candidates by their estimated error times time.
+#include "common/render/algorithm_pilot.h"
+
+#include <gtest/gtest.h>
+
+#include "common/render/local_render.h"
+#include "common/scene/scene.h"
+
+namespace farm {
+namespace {
+
+const std::string kShared = FARM_SHARED_DIR;
+
+std::shared_ptr<Scene> load(const std::string& path, int side) {
+  RenderSettings settings;
+  settings.autoAlgorithm = true;
+  settings.width = settings.height = side;
+  return loadScene(path, settings);
+}
+
+// mlt on the Cornell box, with and without the plan: the multi-chain and manifold
+// perturbations never apply to a path without specular vertices, so at zero weight the chain
+// draws the same numbers and takes the same steps. A plan that left out a mutation that does
+// apply (the caustic perturbation, which moves D D E paths) would change the image here.
+TEST(PlanJob, LeavingOutTheSpecularMutationsChangesNothingButTheAsking) {
+  std::shared_ptr<Scene> scene = load(kShared + "/scenes/cornell-box/scene.xml", 48);
+  RenderSettings asked;
+  asked.algorithm = Algorithm::MLT;
+  asked.width = asked.height = 48;
+  asked.mutationsPerPixel = 32;
+  asked.numChains = 8;
+  asked.seed = 3;
+  RenderSettings planned = asked, kept = asked;
+  const RenderPlan plan = planJob(scene, &planned);
+  kept.ignorePlan = true;
+  const RenderPlan notApplied = planJob(scene, &kept);
+  EXPECT_TRUE(plan.applied);
+  EXPECT_FALSE(notApplied.applied);
+  EXPECT_EQ(planned.mutationMix.multiChainPerturbation, 0);
+  EXPECT_EQ(planned.mutationMix.manifoldPerturbation, 0);
+  EXPECT_EQ(kept.mutationMix, MutationMix());
+
+  const LocalRenderResult a = renderLocally(RenderJob(scene, planned, "planned"));
+  const LocalRenderResult b = renderLocally(RenderJob(scene, kept, "kept"));
+  EXPECT_EQ(a.work, b.work);
+  EXPECT_EQ(a.rays, b.rays);
+  ASSERT_EQ(a.image.rgb.size(), b.image.rgb.size());
+  for (size_t i = 0; i < a.image.rgb.size(); ++i)
+    ASSERT_EQ(a.image.rgb[i], b.image.rgb[i]) << "value " << i;
+  EXPECT_EQ(a.tallies.count("multichain"), 0u);
+  EXPECT_EQ(a.tallies.count("manifold"), 0u);
+  EXPECT_GT(a.tallies.count("caustic"), 0u) << "the caustic perturbation is kept";
+}
+
+TEST(PlanJob, AutoTakesTheOnlyCandidateWithoutAPilot) {
+  std::shared_ptr<Scene> scene = load(kShared + "/scenes/water-caustic/scene.xml", 32);
+  RenderSettings settings;
+  settings.autoAlgorithm = true;
+  settings.width = settings.height = 32;
+  const RenderPlan plan = planJob(scene, &settings);
+  EXPECT_EQ(settings.algorithm, Algorithm::MLT);
+  EXPECT_FALSE(settings.autoAlgorithm);
+  EXPECT_TRUE(plan.automatic);
+  EXPECT_TRUE(plan.pilot.empty());
+  EXPECT_EQ(settings.mutationMix, MutationMix());
+}
+
+// On veach-bidir, whose light comes mostly through a lamp's small bulb, path tracing's error
+// is tens of times bidirectional path tracing's (README, "The plan"): a pilot of half a second
+// each ranks bdpt first, and says so with its figures.
+TEST(PlanJob, ThePilotRanksByEstimatedErrorTimesTime) {
+  std::shared_ptr<Scene> scene = load(kShared + "/scenes/veach-bidir/scene.xml", 48);
+  RenderSettings settings;
+  settings.width = settings.height = 48;
+  const std::vector<PilotFigure> figures =
+      runPilot(scene, settings, {Algorithm::PathTracing, Algorithm::Bidirectional}, 0.5);
+  ASSERT_EQ(figures.size(), 2u);
+  EXPECT_EQ(figures[0].algorithm, Algorithm::Bidirectional);
+  for (const PilotFigure& f : figures) {
+    EXPECT_TRUE(f.failure.empty()) << f.failure;
+    EXPECT_GT(f.estimatedRelMse, 0) << algorithmName(f.algorithm);
+    EXPECT_GT(f.seconds, 0.2) << algorithmName(f.algorithm);
+    EXPECT_LT(f.seconds, 2.0) << algorithmName(f.algorithm) << ": the deadline is kept";
+    EXPECT_DOUBLE_EQ(f.score, f.estimatedRelMse * f.seconds);
+  }
+  EXPECT_GT(figures[1].score, 3 * figures[0].score);
+
+  // A candidate that cannot render says why and sorts last.
+  const std::vector<PilotFigure> cancelled =
+      runPilot(scene, settings, {Algorithm::Bidirectional}, 0.5, [] { return false; });
+  EXPECT_TRUE(cancelled.empty());
+}
+
+TEST(PlanJob, PilotSecondsAreAShareOfTheBudget) {
+  RenderSettings s;
+  EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), kPilotSecondsWithoutBudget);
+  s.timeBudgetSeconds = 100;
+  EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), 2.5);
+  s.timeBudgetSeconds = 1;
+  EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), kPilotMinSeconds);
+  s.timeBudgetSeconds = 10000;
+  EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), kPilotMaxSeconds);
+}
+
+}  // namespace
+}  // namespace farm
