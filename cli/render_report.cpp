@@ -323,6 +323,7 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
       {"num_chains", p.settings.numChains},
       {"large_step_probability", p.settings.largeStepProbability},
       {"until_error", p.settings.untilError},
+      {"mutation_mix", formatMutationMix(p.settings.mutationMix)},
   };
   j["bootstrap_share"] = p.elapsedSeconds > 0 ? p.bootstrapSeconds / p.elapsedSeconds : 0.0;
   j["normalization_relative_std_error"] = relativeZError(p);

@@ -66,12 +66,20 @@ TEST(FarmCompare, RendersEachAlgorithmAndWritesTheReport) {
   ScratchDir scratch("compare");
   const std::string dir = scratch / "report";
   CommandResult r = runCommand(
-      {FARM_CLI_BIN, "compare", kScene, "--algorithms", "pt,bdpt,pssmlt", "--width", "48",
+      {FARM_CLI_BIN, "compare", kScene, "--algorithms", "pt,bdpt,pssmlt,auto", "--width", "48",
        "--height", "48", "--spp", "8", "--mpp", "8", "--threads", "2", "--report", dir},
       seconds(180), scratch.path());
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_EQ(r.err.find("no chart"), std::string::npos) << r.err;
-  expectReport(dir, {"pt", "bdpt", "pssmlt"});
+  expectReport(dir, {"pt", "bdpt", "pssmlt", "auto"});
+  // Each job's plan is on the page, auto's with its pilot.
+  const std::string html = readFile(dir + "/index.html");
+  EXPECT_EQ(count(html, "<h3>"), 4u);  // the Cornell box: pt, bdpt and pssmlt, a second each
+  EXPECT_NE(html.find("left out: lens sampling"), std::string::npos);
+  EXPECT_NE(html.find("(auto)"), std::string::npos);
+  EXPECT_NE(html.find("pilot pt: "), std::string::npos);
+  const nlohmann::json report = nlohmann::json::parse(readFile(dir + "/auto/report.json"));
+  EXPECT_FALSE(report["render_plan"].empty());
 
   // What it refuses, before rendering anything.
   CommandResult bad = runCommand(

@@ -20,10 +20,13 @@ double since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-// The pilot's chains: one group each, each on a thread of its own so that every group gets
-// the same share of the machine however few cores it has (a pool would run the first chains
-// to the deadline and the rest not at all).
+// The pilot's chains are the job's (its --chains, 64 by default, at most kPilotMaxChains) in
+// four groups, as the job's would be: a Markov chain's early error is mostly how much of the
+// image its chains have covered, which the chain count sets. Each runs on a thread of its own,
+// so that every chain gets the same share of the machine however few cores it has (a pool
+// would run the first chains to the deadline and the rest not at all).
 constexpr int kPilotGroups = 4;
+constexpr int kPilotMaxChains = 64;
 
 PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings, double seconds,
                      const std::function<bool()>& keepGoing) {
@@ -33,7 +36,8 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
   settings.timeBudgetSeconds = seconds;
   settings.untilError = 0;
   settings.errorGroups = kPilotGroups;
-  settings.numChains = kPilotGroups;
+  settings.numChains = std::clamp(settings.numChains > 0 ? settings.numChains : kPilotMaxChains,
+                                  kPilotGroups, kPilotMaxChains);
   settings.bootstrapSamples = 0;
   // Flush often: the deadline is looked at only between flushes.
   settings.flushInterval = 1024;
@@ -45,7 +49,7 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
     figure.bootstrapSeconds = since(start);
     std::vector<ChainSpec> specs = job.planChains(bootstrap);
     const size_t size = size_t(job.width()) * job.height() * 3;
-    const int groups = kPilotGroups;
+    const int groups = kPilotGroups;  // planChains: min(errorGroups, chains) of them
     std::vector<std::vector<double>> sums(groups, std::vector<double>(size, 0.0));
     std::vector<int64_t> work(groups, 0);
     std::mutex mutex;
@@ -113,7 +117,7 @@ double pilotSecondsEach(const RenderSettings& settings, size_t candidates) {
   const double each = settings.timeBudgetSeconds > 0
                           ? kPilotShare * settings.timeBudgetSeconds / double(candidates)
                           : kPilotSecondsWithoutBudget;
-  return std::clamp(each, kPilotMinSeconds, kPilotMaxSeconds);
+  return each < kPilotMinSeconds ? 0.0 : std::min(each, kPilotMaxSeconds);
 }
 
 std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
@@ -135,6 +139,15 @@ std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
   return figures;
 }
 
+Algorithm pilotPick(Algorithm first, const std::vector<PilotFigure>& figures) {
+  double firstScore = -1;
+  for (const PilotFigure& f : figures)
+    if (f.algorithm == first) firstScore = f.score;
+  if (figures.empty() || figures.front().score < 0) return first;
+  const PilotFigure& best = figures.front();
+  return firstScore < 0 || best.score * kPilotMargin < firstScore ? best.algorithm : first;
+}
+
 RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
                    const std::function<bool()>& keepGoing) {
   const SceneAnalysis analysis = analyseScene(*scene);
@@ -143,8 +156,12 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
   if (settings->autoAlgorithm) {
     if (plan.shortlist.empty())
       throw std::runtime_error("no algorithm of this build can render this scene");
-    if (plan.shortlist.size() > 1) {
-      const double seconds = pilotSecondsEach(*settings, plan.shortlist.size());
+    const double seconds = pilotSecondsEach(*settings, plan.shortlist.size());
+    if (plan.shortlist.size() > 1 && seconds <= 0) {
+      plan.why += "; no pilot: " + std::to_string(int(100 * kPilotShare)) + "% of the budget " +
+                  "gives each candidate under " + std::to_string(kPilotMinSeconds).substr(0, 4) +
+                  " s, so the first renders";
+    } else if (plan.shortlist.size() > 1) {
       RenderSettings pilot = *settings;
       pilot.mutationMix = plan.mutationMix;
       plan.pilot = runPilot(scene, pilot, plan.shortlist, seconds, keepGoing);
@@ -154,7 +171,17 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
         throw std::runtime_error("the pilot found no algorithm that renders this scene (" + why +
                                  ")");
       }
-      plan.choose(plan.pilot.front().algorithm);
+      const Algorithm first = plan.shortlist.front();
+      const PilotFigure& best = plan.pilot.front();
+      const Algorithm pick = pilotPick(first, plan.pilot);
+      plan.why +=
+          std::string("; the pilot: ") + algorithmName(pick) +
+          (pick == first ? (best.algorithm == first
+                                ? " scored best"
+                                : std::string(" stays, ") + algorithmName(best.algorithm) +
+                                      "'s score is not under half of its")
+                         : " scored under half of " + std::string(algorithmName(first)) + "'s");
+      plan.choose(pick);
     }
     settings->algorithm = plan.algorithm;
     settings->autoAlgorithm = false;

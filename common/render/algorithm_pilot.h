@@ -20,12 +20,21 @@ namespace farm {
 
 class Scene;
 
-// The share of a job's time budget the pilot may take, and its seconds per candidate without
-// a budget (a job of counts) and the bounds either way.
+// The share of a job's time budget the pilot may take, its seconds per candidate without a
+// budget (a job of counts), and its bounds: a candidate gets at most kPilotMaxSeconds, and a
+// budget whose share would give each less than kPilotMinSeconds gets no pilot (the plan's
+// first candidate renders, and the plan says why): under a second, the estimate mostly
+// measures how fast a candidate covers the image.
 constexpr double kPilotShare = 0.1;
 constexpr double kPilotSecondsWithoutBudget = 1.0;
-constexpr double kPilotMinSeconds = 0.25, kPilotMaxSeconds = 5.0;
+constexpr double kPilotMinSeconds = 1.0, kPilotMaxSeconds = 5.0;
+// The pilot overrules the plan's first candidate only for one whose score is under the first's
+// over this: a pilot's estimate at a few samples per pixel scatters by tens of percent and
+// overrates what covers the image fastest (measured on veach-mis, where pilots of 0.2-2 s
+// ranked pt, bdpt and pssmlt three ways, and bdpt led at 10, 30 and 100 s).
+constexpr double kPilotMargin = 2.0;
 
+// Seconds per candidate; 0: no pilot.
 double pilotSecondsEach(const RenderSettings& settings, size_t candidates);
 
 // Renders each candidate for `seconds` (its bootstrap included) and returns their figures,
@@ -35,6 +44,10 @@ std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
                                   const RenderSettings& settings,
                                   const std::vector<Algorithm>& candidates, double seconds,
                                   const std::function<bool()>& keepGoing = {});
+
+// What the pilot's figures (best score first) pick: the plan's first candidate, unless it
+// failed or another's score is under its own over kPilotMargin.
+Algorithm pilotPick(Algorithm first, const std::vector<PilotFigure>& figures);
 
 // The job's plan, applied to *settings: with settings->autoAlgorithm the algorithm the plan
 // (and its pilot, where it has more than one candidate) picks; unless settings->ignorePlan,

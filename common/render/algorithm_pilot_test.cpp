@@ -93,13 +93,46 @@ TEST(PlanJob, ThePilotRanksByEstimatedErrorTimesTime) {
   EXPECT_TRUE(cancelled.empty());
 }
 
+TEST(PlanJob, ABudgetTooShortForAPilotTakesTheFirstCandidate) {
+  std::shared_ptr<Scene> scene = load(kShared + "/scenes/cornell-box/scene.xml", 32);
+  RenderSettings settings;
+  settings.autoAlgorithm = true;
+  settings.width = settings.height = 32;
+  settings.timeBudgetSeconds = 1;
+  const RenderPlan plan = planJob(scene, &settings);
+  EXPECT_TRUE(plan.pilot.empty());
+  ASSERT_GT(plan.shortlist.size(), 1u);
+  EXPECT_EQ(settings.algorithm, plan.shortlist.front());
+  EXPECT_NE(plan.why.find("no pilot"), std::string::npos) << plan.why;
+}
+
+TEST(PlanJob, ThePilotOverrulesTheFirstCandidateOnlyByAMargin) {
+  auto figure = [](Algorithm a, double score) {
+    PilotFigure f;
+    f.algorithm = a;
+    f.score = score;
+    f.estimatedRelMse = score;
+    return f;
+  };
+  const Algorithm bdpt = Algorithm::Bidirectional, pt = Algorithm::PathTracing;
+  EXPECT_EQ(pilotPick(bdpt, {figure(pt, 0.6), figure(bdpt, 1.0)}), bdpt) << "within the margin";
+  EXPECT_EQ(pilotPick(bdpt, {figure(pt, 0.4), figure(bdpt, 1.0)}), pt) << "clearly better";
+  EXPECT_EQ(pilotPick(bdpt, {figure(bdpt, 0.4), figure(pt, 1.0)}), bdpt);
+  PilotFigure failed = figure(bdpt, -1);
+  failed.failure = "no light";
+  EXPECT_EQ(pilotPick(bdpt, {figure(pt, 0.9), failed}), pt) << "the first failed";
+  EXPECT_EQ(pilotPick(bdpt, {}), bdpt);
+}
+
 TEST(PlanJob, PilotSecondsAreAShareOfTheBudget) {
   RenderSettings s;
   EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), kPilotSecondsWithoutBudget);
   s.timeBudgetSeconds = 100;
   EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), 2.5);
-  s.timeBudgetSeconds = 1;
-  EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), kPilotMinSeconds);
+  s.timeBudgetSeconds = 40;
+  EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), 1.0);
+  s.timeBudgetSeconds = 30;
+  EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), 0) << "too short for a pilot";
   s.timeBudgetSeconds = 10000;
   EXPECT_DOUBLE_EQ(pilotSecondsEach(s, 4), kPilotMaxSeconds);
 }
