@@ -663,10 +663,7 @@ void Job::recordErrorLocked(SteadyClock::time_point now, bool force) {
     groupWork.push_back(double(w));
   }
   if (images.size() == groups && groups >= 2) {
-    const double z = bootstrap_.normalization;
-    const double zRel =
-        z > 0 ? (bootstrap_.normalizationStdError / z) * (bootstrap_.normalizationStdError / z)
-              : 0.0;
+    const double zRel = bootstrap_.normalizationRelativeVariance();
     ErrorEstimate estimate;
     if (estimateError(images, groupWork, image, zRel, &estimate, nullptr))
       sample.estimatedRelMse = estimate.relMse;

@@ -93,9 +93,7 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
       groupWork.push_back(double(work[g]));
     }
     const Image image = job.resolve(total, job.imageScale(bootstrap, totalWork));
-    const double z = bootstrap.normalization;
-    const double zRel =
-        z > 0 ? (bootstrap.normalizationStdError / z) * (bootstrap.normalizationStdError / z) : 0.0;
+    const double zRel = bootstrap.normalizationRelativeVariance();
     ErrorEstimate estimate;
     std::string error;
     if (!estimateError(images, groupWork, image, zRel, &estimate, &error))

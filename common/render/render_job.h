@@ -34,6 +34,14 @@ struct BootstrapResult {
   std::vector<std::vector<float>> seedSamples;
   std::vector<std::string> seedPaths;
   std::vector<double> seedContributions;
+
+  // Var(Z) / Z^2, which scales every group's image alike (batch_means.h's zRelativeVariance);
+  // 0 without a Z.
+  double normalizationRelativeVariance() const {
+    if (!(normalization > 0)) return 0;
+    const double r = normalizationStdError / normalization;
+    return r * r;
+  }
 };
 
 struct Progress {  // reported by long stages; return false from the callback to cancel
