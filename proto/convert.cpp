@@ -1,5 +1,7 @@
 #include "proto/convert.h"
 
+#include <cmath>
+
 namespace farm {
 
 namespace {
@@ -145,6 +147,8 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_medium_samples(spec.mediumSamples);
   m.set_medium_march_steps(spec.mediumMarchSteps);
   m.set_error_group(spec.errorGroup);
+  m.set_seen_emission_every(spec.seenEmissionEvery);
+  m.set_seen_emission_scale(spec.seenEmissionScale);
   return m;
 }
 
@@ -176,6 +180,14 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   s.mediumSamples = m.medium_samples();
   s.mediumMarchSteps = m.medium_march_steps();
   s.errorGroup = m.error_group();
+  s.seenEmissionEvery = m.seen_emission_every();
+  s.seenEmissionScale = m.seen_emission_scale();
+  if (s.seenEmissionEvery < 0 || !std::isfinite(s.seenEmissionScale) || s.seenEmissionScale < 0) {
+    *error = "chain " + std::to_string(s.chainIndex) + " has a bad seen-emission sampling (every " +
+             std::to_string(s.seenEmissionEvery) + ", scale " +
+             std::to_string(s.seenEmissionScale) + ")";
+    return false;
+  }
   if (s.flushInterval <= 0) {
     *error = "chain " + std::to_string(s.chainIndex) + " has flush interval " +
              std::to_string(s.flushInterval) + " (must be > 0)";

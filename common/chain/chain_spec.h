@@ -34,6 +34,12 @@ struct ChainSpec {
   double erptChains = 1;
   int erptLength = 100;
   double erptDeposit = 0;
+  // mlt: before every seenEmissionEvery-th mutation (0: never) the chain takes one sample of
+  // the lights the camera sees directly (common/transport/seen_emission.h), which
+  // its target then leaves out, and splats it times seenEmissionScale = seenEmissionEvery / Z,
+  // so that the image's one scale Z / mutations gives it path tracing's weight.
+  int64_t seenEmissionEvery = 0;
+  double seenEmissionScale = 0;
   // mlt through density grids: the estimate of each transmittance in f (see PathChain).
   int mediumSamples = 1;
   int mediumMarchSteps = 0;

@@ -10,6 +10,7 @@
 #include "common/mcmc/primary_sample_integrand.h"
 #include "common/mcmc/primary_sample_sampler.h"
 #include "common/transport/bidirectional.h"
+#include "common/transport/seen_emission.h"
 
 namespace farm {
 
@@ -23,9 +24,12 @@ namespace {
 // The paths of path-space MLT's candidate `index` and the luminance each carries: BDPT's
 // strategies, less those of the paths that manifold next-event estimation takes over, then that
 // estimator's own sample, from the same stream after BDPT's draws. The candidate's I is their
-// sum; its seed path is drawn from them by share.
+// sum; its seed path is drawn from them by share. The lights the camera sees directly (paths
+// L E) are left to SeenEmission where it separates them: Z and the seeds are then those of the
+// chains' target, which excludes those paths.
 void visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
                              const std::function<void(Path&&, double)>& visit) {
+  const bool separated = SeenEmission::separates(scene);
   Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
   IndependentSampler sampler(&rng);
   BidirectionalTracer tracer(scene, maxDepth);
@@ -36,12 +40,15 @@ void visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, in
                            const double share = luminance(sp.unweighted) * sp.weight;
                            if (!(share > 0) || !std::isfinite(share)) return;
                            Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+                           if (separated && x.isSeenEmission(scene)) return;
                            if (manifoldActive && manifold.covers(x)) return;
                            if (!x.contribution(scene, maxDepth, &kCarriesLightCheck).carriesLight())
                              return;
                            visit(std::move(x), share);
                          });
-  manifold.sample(sampler, [&](const Path& x, double value) { visit(Path(x), value); });
+  manifold.sample(sampler, [&](const Path& x, double value) {
+    if (!(separated && x.isSeenEmission(scene))) visit(Path(x), value);
+  });
 }
 
 }  // namespace

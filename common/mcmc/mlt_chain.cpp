@@ -79,6 +79,7 @@ PathChain::PathChain(const Scene& scene, int maxDepth, const MutationMix& mix, i
       marchSteps_(std::max(marchSteps, 0)) {}
 
 PathContribution PathChain::contribution(const Path& x, Rng& rng) const {
+  if (seenEmissionApart_ && x.isSeenEmission(scene_)) return {};
   const TransmittanceEstimator estimator{&rng, mediumSamples_, marchSteps_};
   return x.contribution(scene_, context_.maxDepth, &estimator);
 }
@@ -176,6 +177,15 @@ void runMltChain(const Scene& scene, const ChainSpec& spec,
   Path x;
   PathChain walker(scene, spec.maxDepth, spec.mutationMix, spec.mediumSamples,
                    spec.mediumMarchSteps);
+  // The spec says whether the chain's target leaves L E to its own sampler, as the
+  // coordinator's bootstrap left them out of Z and the seeds (RenderJob::planChains); either
+  // way the chain is exact for its target.
+  const bool apart = spec.seenEmissionEvery > 0;
+  if (apart && !(spec.seenEmissionScale > 0 && std::isfinite(spec.seenEmissionScale)))
+    throw std::runtime_error(chain + ": its seen-emission scale is not a positive number");
+  walker.setSeenEmissionApart(apart);
+  const SeenEmission emission(scene);
+  std::vector<Splat> splats;
   if (!spec.resumeState.empty()) {
     PathContribution fx;
     if (!deserializeState(spec.resumeState, scene, &rng, &x, &fx))
@@ -188,8 +198,21 @@ void runMltChain(const Scene& scene, const ChainSpec& spec,
   }
   ChainFlusher flusher(spec, scene, onFlush, cancel);
   while (flusher.budgetLeft()) {
+    if (apart && flusher.done() % spec.seenEmissionEvery == 0) {
+      // Before the mutation it precedes, so that a chain resumed at a flush takes the same.
+      const Camera& camera = scene.camera();
+      Vec2f p(rng.nextFloat() * float(camera.width()), rng.nextFloat() * float(camera.height()));
+      p.x = std::min(p.x, std::nextafter(float(camera.width()), 0.0f));
+      p.y = std::min(p.y, std::nextafter(float(camera.height()), 0.0f));
+      splats.clear();
+      emission.sample(p, rng, &splats);
+      for (const Splat& s : splats) {
+        const Spectrum value = s.value * float(spec.seenEmissionScale);
+        if (flusher.check(value)) flusher.film().add(s.film, value);
+      }
+    }
     walker.step(rng, flusher.film(), 1.0f, &flusher);
-    if (!flusher.countMutation(walker.rays(), [&] {
+    if (!flusher.countMutation(walker.rays() + emission.rays(), [&] {
           return serializeState(rng, walker.current(), walker.currentContribution());
         }))
       return;

@@ -18,6 +18,7 @@
 #include "common/mcmc/mutations/manifold_perturbation.h"
 #include "common/mcmc/mutations/multi_chain_perturbation.h"
 #include "common/scene/scene.h"
+#include "common/transport/seen_emission.h"
 
 namespace farm {
 
@@ -38,6 +39,10 @@ class PathChain {
   // Starts (or restarts) at x, estimating f(x) with numbers from rng (again, a few times, when
   // an estimate comes out 0); false when x carries no light.
   bool start(const Path& x, Rng& rng);
+  // With `apart`, the chain's target leaves out the paths L E (f = 0 there), whose light
+  // SeenEmission renders beside the chain (mlt's chains; ERPT's keep them, their seeds from
+  // path tracing carry them). Before start().
+  void setSeenEmissionApart(bool apart) { seenEmissionApart_ = apart; }
   // Resumes at x with the estimate its state kept.
   void resume(const Path& x, const PathContribution& fx);
   // One step: the proposal's colour with weight a * deposit and the current path's with
@@ -67,10 +72,17 @@ class PathChain {
   PathContribution contribution(const Path& x, Rng& rng) const;
 
   int mediumSamples_, marchSteps_;
+  bool seenEmissionApart_ = false;
   Path x_, y_;
   PathContribution fx_;
   Selection sx_;
 };
+
+// mlt's chains take one sample of the lights in view (seen_emission.h) before every this many
+// mutations: a sample costs two rays against a mutation's several, and at 8 the film gets a
+// sample per pixel for every 8 mutations per pixel, which leaves the lights' edges far less
+// noisy than the chains' own share of the image.
+constexpr int64_t kSeenEmissionEvery = 8;
 
 // The random numbers of chain `chainIndex` of a job of `seed`: the worker's chain and the
 // bootstrap (which checks that the chain can start from its seed) draw the same.

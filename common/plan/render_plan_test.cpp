@@ -73,6 +73,8 @@ TEST(RenderPlan, CornellBoxIsDiffuseUnderOneLargeLight) {
   EXPECT_FALSE(part(p, "texture lookups").enabled);
   EXPECT_FALSE(part(p, "escaped-path handling").enabled);
   EXPECT_FALSE(part(p, "medium tracking").enabled);
+  EXPECT_TRUE(part(p, "seen emission apart").enabled);
+  EXPECT_FALSE(part(plan(path, Algorithm::PSSMLT, false), "seen emission apart").enabled);
   expectNamedLeftOuts(p, path);
 
   const RenderPlan automatic = plan(path, Algorithm::PSSMLT, true);
@@ -96,6 +98,7 @@ TEST(RenderPlan, WaterCausticIsSpecularDiffuseSpecularAndOnlyMltMayRenderIt) {
   EXPECT_TRUE(part(p, "manifold perturbation").enabled);
   EXPECT_TRUE(part(p, "multi-chain perturbation").enabled);
   EXPECT_TRUE(part(p, "manifold next-event estimation").enabled);
+  EXPECT_TRUE(part(p, "seen emission apart").enabled);
   EXPECT_EQ(p.mutationMix, MutationMix());
   expectNamedLeftOuts(p, path);
 }
@@ -163,6 +166,10 @@ TEST(RenderPlan, ALensAnEnvironmentAndMediaAreInAndNarrowTheCandidates) {
   const RenderPlan smoke = plan(kTestData + "/smoke-room/scene.xml", Algorithm::PSSMLT, true);
   EXPECT_GT(smoke.scene.gridMedia, 0);
   EXPECT_TRUE(part(smoke, "medium tracking").enabled);
+  EXPECT_FALSE(
+      part(plan(kTestData + "/smoke-room/scene.xml", Algorithm::MLT, false), "seen emission apart")
+          .enabled)
+      << "through media the chains keep the lights they see";
   EXPECT_FALSE(candidate(smoke, Algorithm::ERPT));
 }
 

@@ -20,6 +20,7 @@
 #include "common/transport/bidirectional.h"
 #include "common/transport/path.h"
 #include "common/transport/path_tracer.h"
+#include "common/transport/seen_emission.h"
 
 namespace farm {
 
@@ -167,6 +168,13 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
     }
   }
   if (!(c.mean > 0)) {
+    if (settings_.algorithm == Algorithm::MLT && SeenEmission::separates(*scene_)) {
+      throw std::runtime_error(
+          "no light reaches the camera but from the lights it sees directly: none of " +
+          std::to_string(count) +
+          " bidirectional candidate paths carries other light, and mlt's chains leave those to "
+          "its own sampler (use pt)");
+    }
     throw std::runtime_error("no light reaches the camera: none of " + std::to_string(count) +
                              " bidirectional candidate paths carries light");
   }
@@ -196,6 +204,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
       // mixes, as it forgets that its first estimate is drawn afresh.
       PathChain walker(*scene_, maxDepth, settings_.mutationMix, settings_.mediumSamples,
                        settings_.mediumMarchSteps);
+      walker.setSeenEmissionApart(SeenEmission::separates(*scene_));
       auto chainStarts = [&] {
         Rng rng = mltChainRng(settings_.seed, uint32_t(c));
         return walker.start(path, rng);
@@ -265,6 +274,10 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
         s.mutationMix = settings_.mutationMix;
         s.mediumSamples = settings_.mediumSamples;
         s.mediumMarchSteps = settings_.mediumMarchSteps;
+        if (SeenEmission::separates(*scene_)) {
+          s.seenEmissionEvery = kSeenEmissionEvery;
+          s.seenEmissionScale = double(kSeenEmissionEvery) / bootstrap.normalization;
+        }
       } else {
         s.seedSample = bootstrap.seedSamples[c];
       }

@@ -74,6 +74,13 @@ bool Path::isSpecular(const Scene& scene, int i) const {
   return v.kind == PathVertex::Kind::Surface && v.shape >= 0 && scene.bsdfOf(v.shape).isDelta();
 }
 
+bool Path::isSeenEmission(const Scene& scene) const {
+  if (length() != 1 || vertices[0].light < 0) return false;
+  // A point light cannot be hit and the environment is not path-space MLT's: only area lights.
+  const AreaLight& light = scene.lights()[size_t(vertices[0].light)];
+  return !light.isPoint() && !light.isEnvironment();
+}
+
 PathContribution Path::contribution(const Scene& scene, int maxDepth,
                                     const TransmittanceEstimator* estimator) const {
   PathContribution out;

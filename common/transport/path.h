@@ -98,6 +98,8 @@ class Path {
 
   // Whether x_i scatters only through Dirac lobes (a specular vertex).
   bool isSpecular(const Scene& scene, int i) const;
+  // Whether x is an area light seen directly: the path L E (seen_emission.h).
+  bool isSeenEmission(const Scene& scene) const;
 
   // The area densities of each vertex sampled from the light side (pL) and from the camera side
   // (pE), from the vertices alone (see pathDensities); at a vertex sampled through a Dirac lobe
