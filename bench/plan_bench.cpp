@@ -15,6 +15,7 @@
 
 #include <string>
 
+#include "bench/chain_bench.h"
 #include "common/plan/render_plan.h"
 #include "common/render/render_job.h"
 #include "common/scene/film_override.h"
@@ -66,20 +67,7 @@ void runOneChain(benchmark::State& state, std::shared_ptr<Scene> scene, RenderSe
   s.bootstrapSamples = 1 << 15;
   s.numChains = 1;
   RenderJob job(scene, s, "bench");
-  ChainSpec spec = job.planChains(job.bootstrap())[0];
-  const int64_t work = 20000;
-  int64_t done = 0, rays = 0;
-  for (auto _ : state) {
-    spec.budget = work;
-    spec.flushInterval = work;
-    job.runChain(spec, [&](ChainFlush&& f) {
-      done += f.mutations;
-      rays += f.rays;
-      return true;
-    });
-  }
-  state.counters["work/s"] = benchmark::Counter(double(done), benchmark::Counter::kIsRate);
-  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  runChainIterations(state, job, job.planChains(job.bootstrap())[0], 20000, "work/s");
 }
 
 void BM_Part(benchmark::State& state, Algorithm algorithm, Part part) {

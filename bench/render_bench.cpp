@@ -6,6 +6,7 @@
 #include <chrono>
 #include <string>
 
+#include "bench/chain_bench.h"
 #include "common/mcmc/bootstrap.h"
 #include "common/render/render_job.h"
 #include "common/scene/scene.h"
@@ -59,21 +60,9 @@ void BM_Chain(benchmark::State& state, const char* name, Algorithm algorithm) {
   s.numChains = 1;
   auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/" + name + "/scene.xml", s);
   RenderJob job(scene, s, "bench");
-  ChainSpec spec = job.planChains(job.bootstrap())[0];
-  const int64_t work = algorithm == Algorithm::ERPT ? 1024 : 20000;
-  int64_t done = 0, rays = 0;
-  for (auto _ : state) {
-    spec.budget = work;
-    spec.flushInterval = work;
-    job.runChain(spec, [&](ChainFlush&& f) {
-      done += f.mutations;
-      rays += f.rays;
-      return true;
-    });
-  }
-  state.counters[algorithm == Algorithm::ERPT ? "seeds/s" : "mutations/s"] =
-      benchmark::Counter(double(done), benchmark::Counter::kIsRate);
-  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  const bool erpt = algorithm == Algorithm::ERPT;
+  runChainIterations(state, job, job.planChains(job.bootstrap())[0], erpt ? 1024 : 20000,
+                     erpt ? "seeds/s" : "mutations/s");
 }
 
 BENCHMARK_CAPTURE(BM_PathTracing, Cornell, "cornell-box")->MinTime(2.0);

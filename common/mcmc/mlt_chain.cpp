@@ -13,6 +13,8 @@
 #include "common/mcmc/mutations/lens_subpath_mutation.h"
 #include "common/mcmc/mutations/multi_chain_perturbation.h"
 #include "common/mcmc/mutations/mutation.h"
+#include "common/mcmc/primary_sample_integrand.h"
+#include "common/sampling/sampler.h"
 
 namespace farm {
 
@@ -200,10 +202,8 @@ void runMltChain(const Scene& scene, const ChainSpec& spec,
   while (flusher.budgetLeft()) {
     if (apart && flusher.done() % spec.seenEmissionEvery == 0) {
       // Before the mutation it precedes, so that a chain resumed at a flush takes the same.
-      const Camera& camera = scene.camera();
-      Vec2f p(rng.nextFloat() * float(camera.width()), rng.nextFloat() * float(camera.height()));
-      p.x = std::min(p.x, std::nextafter(float(camera.width()), 0.0f));
-      p.y = std::min(p.y, std::nextafter(float(camera.height()), 0.0f));
+      IndependentSampler sampler(&rng);
+      const Vec2f p = primarySampleFilmPoint(scene.camera(), sampler);
       splats.clear();
       emission.sample(p, rng, &splats);
       for (const Splat& s : splats) {
