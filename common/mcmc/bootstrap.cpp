@@ -46,9 +46,8 @@ void visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, in
                              return;
                            visit(std::move(x), share);
                          });
-  manifold.sample(sampler, [&](const Path& x, double value) {
-    if (!(separated && x.isSeenEmission(scene))) visit(Path(x), value);
-  });
+  // Its paths have a diffuse vertex (ManifoldNextEvent::covers): none is a light in view.
+  manifold.sample(sampler, [&](const Path& x, double value) { visit(Path(x), value); });
 }
 
 }  // namespace

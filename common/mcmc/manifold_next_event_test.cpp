@@ -76,7 +76,7 @@ TEST(ManifoldNextEvent, BootstrapFindsWhatBdptCannotInThePool) {
 
 // What BDPT's strategies carry on the paths manifold next-event estimation covers, against
 // what it carries there itself, sample by sample; and Z with it in place of those strategies
-// (Z of mlt's chains, which leave out the paths L S* E where SeenEmission separates them).
+// (Z of mlt's chains, which leave out the paths L E where SeenEmission separates them).
 void expectTakesOverWhatBdptCarries(const Scene& scene, int maxDepth, int samples,
                                     double resolution, const char* name) {
   const ManifoldNextEvent manifold(scene, maxDepth);
@@ -92,8 +92,7 @@ void expectTakesOverWhatBdptCarries(const Scene& scene, int maxDepth, int sample
                              const double share = luminance(sp.unweighted) * sp.weight;
                              if (!(share > 0)) return;
                              Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
-                             // mlt's Z leaves the emission seen through specular surfaces
-                             // alone to SeenEmission
+                             // mlt's Z leaves the lights seen directly to SeenEmission
                              if (SeenEmission::separates(scene) && x.isSeenEmission(scene)) return;
                              bdptAll[i] += share;
                              if (local.covers(x)) bdptCovered[i] += share;
