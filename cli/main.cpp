@@ -68,6 +68,7 @@ struct RenderOptions {
   double untilError = 0;
   int errorGroups = 0;
   bool noPlan = false;
+  std::string shadingNormals = "scene";
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -154,6 +155,15 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       "keep every part the settings name, even those the scene's plan leaves out (mlt's "
       "caustic, multi-chain and manifold perturbations on a scene without specular surfaces): "
       "to measure what leaving them out saves");
+  command
+      ->add_option("--shading-normals", o->shadingNormals,
+                   "scene (the file's: a Mitsuba integrator's strictNormals, false when it has "
+                   "none; strict for pbrt files), strict (drop paths whose directions the "
+                   "geometric and the shading normal put on different sides of a surface: no "
+                   "light leaks through smooth-shaded meshes, but their silhouettes lose the "
+                   "light of such paths) or lax (keep them, as Mitsuba without strictNormals, "
+                   "pbrt-v4 and Tungsten do)")
+      ->default_str("scene");
   o->timeOption = command->add_option(
       "--time", o->time,
       "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
@@ -180,6 +190,10 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     return false;
   }
   s->ignorePlan = o.noPlan;
+  if (!farm::parseShadingNormals(o.shadingNormals, &s->shadingNormals)) {
+    *error = "--shading-normals must be scene, strict or lax, not '" + o.shadingNormals + "'";
+    return false;
+  }
   constexpr int64_t kMaxPerPixel = int64_t(1) << 24;
   if (o.spp < 1 || o.spp > kMaxPerPixel) {
     *error = "--spp must be between 1 and " + std::to_string(kMaxPerPixel) + ", not " +

@@ -89,6 +89,10 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_error_groups(settings.errorGroups);
   m.set_auto_algorithm(settings.autoAlgorithm);
   m.set_ignore_plan(settings.ignorePlan);
+  m.set_shading_normals(
+      settings.shadingNormals == ShadingNormals::Strict ? v1::SHADING_NORMALS_STRICT
+      : settings.shadingNormals == ShadingNormals::Lax  ? v1::SHADING_NORMALS_LAX
+                                                        : v1::SHADING_NORMALS_SCENE);
   return m;
 }
 
@@ -115,6 +119,20 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.errorGroups = m.error_groups();
   s.autoAlgorithm = m.auto_algorithm();
   s.ignorePlan = m.ignore_plan();
+  switch (m.shading_normals()) {
+    case v1::SHADING_NORMALS_SCENE:
+      s.shadingNormals = ShadingNormals::Scene;
+      break;
+    case v1::SHADING_NORMALS_STRICT:
+      s.shadingNormals = ShadingNormals::Strict;
+      break;
+    case v1::SHADING_NORMALS_LAX:
+      s.shadingNormals = ShadingNormals::Lax;
+      break;
+    default:
+      *error = "unknown shading-normal convention " + std::to_string(int(m.shading_normals()));
+      return false;
+  }
   *out = s;
   return true;
 }

@@ -7,8 +7,10 @@ namespace farm {
 
 // Bumped whenever farm.proto changes incompatibly; RegisterWorker rejects a mismatch.
 // 2: sparse and compressed flushes; 3: batches (FlushHeader.entries); 4: mlt's seen emission
-// (ChainSpec.seen_emission_every), which a worker of 3 would drop and render the light twice
-inline constexpr uint32_t kProtocolVersion = 4;
+// (ChainSpec.seen_emission_every), which a worker of 3 would drop and render the light twice;
+// 5: RenderSettings.shading_normals, which a worker of 4 would drop and render the scene's
+// convention where the job overrides it
+inline constexpr uint32_t kProtocolVersion = 5;
 
 // gRPC message size limit, set explicitly on servers and channels (the library default of 4 MiB
 // is implicit and asymmetric between send and receive).

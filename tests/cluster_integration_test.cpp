@@ -353,6 +353,12 @@ INSTANTIATE_TEST_SUITE_P(
                                   {"--mpp", "8"},
                                   std::string(FARM_SHARED_DIR) + "/scenes/veach-ajar/scene.pbrt",
                                   "pssmlt_veach_ajar_pbrt"},
+                      // a shading-normal convention other than the scene file's: the workers
+                      // must load the scene with it, as the embedded render does
+                      ClusterCase{"pt",
+                                  {"--spp", "8", "--shading-normals", "lax"},
+                                  std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml",
+                                  "pt_water_caustic_lax"},
                       // participating media, the smoke's grid file through the bundle upload
                       ClusterCase{"bdpt",
                                   {"--spp", "4"},

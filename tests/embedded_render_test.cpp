@@ -200,6 +200,40 @@ TEST(EmbeddedRender, SceneWarningsReachTheReport) {
       << statusText(result.progress);
 }
 
+// --shading-normals overrides the scene file's convention: the water caustic (strictNormals true
+// in its file) rendered lax with the same seed is another image (its camera rays through the
+// wavy surface's underside, which strict normals end, go on), brighter, and says so in its
+// metadata; strict is the file's image. (ClusterTest.FetchedImageMatchesEmbeddedRender/
+// pt_water_caustic_lax checks that remote workers get the override.)
+TEST(EmbeddedRender, ShadingNormalsOverrideTheScenes) {
+  auto render = [](ShadingNormals normals) {
+    EmbeddedRenderOptions o = options(Algorithm::PathTracing, 2, 2);
+    o.scenePath = std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml";
+    o.settings.shadingNormals = normals;
+    EmbeddedRenderResult result;
+    Status s = renderEmbedded(o, &result);
+    EXPECT_TRUE(s.isOk()) << s.message();
+    return result;
+  };
+  const EmbeddedRenderResult file = render(ShadingNormals::Scene),
+                             strict = render(ShadingNormals::Strict),
+                             lax = render(ShadingNormals::Lax);
+  EXPECT_EQ(file.metadata.at("farm:shadingNormals"), "strict");
+  EXPECT_EQ(strict.metadata.at("farm:shadingNormals"), "strict");
+  EXPECT_EQ(lax.metadata.at("farm:shadingNormals"), "lax");
+  ASSERT_EQ(lax.image.rgb.size(), file.image.rgb.size());
+  EXPECT_EQ(strict.image.rgb, file.image.rgb);
+  double sumStrict = 0, sumLax = 0;
+  size_t differ = 0;
+  for (size_t i = 0; i < lax.image.rgb.size(); ++i) {
+    sumStrict += strict.image.rgb[i];
+    sumLax += lax.image.rgb[i];
+    differ += lax.image.rgb[i] != strict.image.rgb[i];
+  }
+  EXPECT_GT(differ, lax.image.rgb.size() / 10);
+  EXPECT_GT(sumLax, sumStrict);
+}
+
 // --until-error: the job stops once the error estimated from its chain groups is there,
 // long before its budget, and says so; the report's CSV carries the estimate with no reference.
 // --algorithm auto: the pilot takes about a tenth of the budget, the job renders with its pick,

@@ -333,7 +333,7 @@ TEST_F(HostileRpcTest, AbsurdResolutionIsRejected) {
 // The algorithms' own parameters get the same scrutiny as the film: a mutation mix without the
 // bidirectional mutation (the chain would not be ergodic), weights that are not numbers, ERPT
 // chains and lengths out of range, flush intervals and bootstrap sizes out of range, an
-// algorithm this coordinator does not know.
+// algorithm or a shading-normal convention this coordinator does not know.
 TEST_F(HostileRpcTest, BadAlgorithmParametersAreRejected) {
   v1::RenderSettings settings = smallSettings();
   settings.set_algorithm(v1::MLT);
@@ -359,6 +359,10 @@ TEST_F(HostileRpcTest, BadAlgorithmParametersAreRejected) {
   settings = smallSettings();
   settings.set_algorithm(v1::Algorithm(99));
   EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT, "algorithm");
+  settings = smallSettings();
+  settings.set_shading_normals(v1::ShadingNormals(7));
+  EXPECT_STATUS(submit(settings, files, files, "scene.xml"), INVALID_ARGUMENT,
+                "shading-normal convention");
   // And the coordinator keeps serving.
   EXPECT_TRUE(submit(smallSettings(), files, files, "scene.xml").ok());
 }

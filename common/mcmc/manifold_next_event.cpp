@@ -183,11 +183,11 @@ void ManifoldNextEvent::sample(Sampler& sampler,
     const float u[3] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
                         sampler.next(kCameraStream)};
     BsdfSample b;
-    if (!sidesAgree(wo, z.n, z.ns) ||
+    if (!scene_.sidesAgree(wo, z.n, z.ns) ||
         !bsdf.sample(frame.toLocal(wo), u, TransportMode::Radiance, &b))
       return;
     w = normalize(frame.toWorld(b.wi));
-    if (!sidesAgree(w, z.n, z.ns)) return;
+    if (!scene_.sidesAgree(w, z.n, z.ns)) return;
   }
 }
 

@@ -387,6 +387,7 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
   m["farm:scene"] = scene_->description().sourcePath;
   m["farm:seed"] = std::to_string(settings_.seed);
   m["farm:maxDepth"] = std::to_string(resolvedMaxDepth(settings_, *scene_));
+  m["farm:shadingNormals"] = scene_->strictNormals() ? "strict" : "lax";
   m["farm:renderSeconds"] = formatDouble(seconds);
   const double pixels = double(width()) * height();
   if (isMarkovChain(settings_.algorithm)) {
@@ -428,6 +429,8 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
   if (settings.width > 0 || settings.height > 0) {
     applyFilmOverride(desc, settings.width, settings.height);
   }
+  if (settings.shadingNormals != ShadingNormals::Scene)
+    desc.strictNormals = settings.shadingNormals == ShadingNormals::Strict;
   return std::make_shared<Scene>(desc);
 }
 

@@ -5,6 +5,28 @@
 
 namespace farm {
 
+const char* shadingNormalsName(ShadingNormals s) {
+  switch (s) {
+    case ShadingNormals::Strict:
+      return "strict";
+    case ShadingNormals::Lax:
+      return "lax";
+    case ShadingNormals::Scene:
+      break;
+  }
+  return "scene";
+}
+
+bool parseShadingNormals(const std::string& name, ShadingNormals* out) {
+  for (ShadingNormals s : {ShadingNormals::Scene, ShadingNormals::Strict, ShadingNormals::Lax}) {
+    if (name == shadingNormalsName(s)) {
+      *out = s;
+      return true;
+    }
+  }
+  return false;
+}
+
 std::string RenderSettings::validate() const {
   std::ostringstream err;
   constexpr int kMaxSide = 1 << 16;

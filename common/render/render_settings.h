@@ -7,6 +7,13 @@
 
 namespace farm {
 
+// Which shading-normal convention the scene renders with (Scene::sidesAgree): the one its file
+// gives (Mitsuba's integrator strictNormals, false when absent; strict for pbrt files), or one
+// named here, which overrides it.
+enum class ShadingNormals { Scene, Strict, Lax };
+const char* shadingNormalsName(ShadingNormals s);  // "scene", "strict", "lax"
+bool parseShadingNormals(const std::string& name, ShadingNormals* out);
+
 struct RenderSettings {
   Algorithm algorithm = Algorithm::PSSMLT;
   // --algorithm auto: the coordinator picks the algorithm by the scene's plan and a short pilot
@@ -22,6 +29,7 @@ struct RenderSettings {
   double timeBudgetSeconds = 0;    // > 0: stop at this wall-clock budget, not at a count
   uint64_t seed = 1;
   int maxDepth = 0;  // 0: the scene's; else the longest path in edges
+  ShadingNormals shadingNormals = ShadingNormals::Scene;  // --shading-normals
   // Markov chain settings (PSSMLT)
   int64_t bootstrapSamples = 0;       // candidate paths; 0: sized to the job (bootstrap_size.h)
   int numChains = 0;                  // independent chains (work units); 0: default

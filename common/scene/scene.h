@@ -56,12 +56,6 @@ struct AreaLight {
   bool isPoint() const { return point >= 0; }
 };
 
-// Mitsuba's strictNormals: a direction is usable at a surface only when the geometric and the
-// shading normal agree on which side it lies; otherwise light would leak through the surface.
-inline bool sidesAgree(const Vec3f& w, const Vec3f& ng, const Vec3f& ns) {
-  return dot(w, ng) * dot(w, ns) > 0;
-}
-
 // The adjoint BSDF with shading normals is not the BSDF (Veach 1997, eq. 5.17): particles
 // (importance mode) scattered from wo to wi carry this extra factor.
 inline float shadingCorrection(const Vec3f& wo, const Vec3f& wi, const Vec3f& ng, const Vec3f& ns) {
@@ -82,6 +76,18 @@ class Scene {
   float extent() const { return extent_; }         // radius of the bounding sphere
 
   Vec3f center() const { return center_; }  // of the bounding sphere
+
+  // Whether direction w may leave or reach a surface point of geometric normal ng and shading
+  // normal ns. With strict normals (Mitsuba's strictNormals, SceneDescription::strictNormals) only
+  // where both normals put w on the same side: a path that would cross the surface by the one
+  // and not the other has f = 0, so no light leaks through a smooth-shaded mesh, at the price of
+  // the paths near its silhouette. Without, every direction: the BSDF, evaluated in the shading
+  // frame, alone decides (Mitsuba with strictNormals false, Tungsten, pbrt-v4). Every sampler
+  // and every evaluation of f asks here, so that all of them estimate the same integral.
+  bool sidesAgree(const Vec3f& w, const Vec3f& ng, const Vec3f& ns) const {
+    return !desc_.strictNormals || dot(w, ng) * dot(w, ns) > 0;
+  }
+  bool strictNormals() const { return desc_.strictNormals; }
 
   // Closest hit along r within (0, r.tMax); false when the ray leaves the scene.
   bool intersect(const Ray& r, SurfaceHit* hit) const;

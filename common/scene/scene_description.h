@@ -167,6 +167,11 @@ struct SceneDescription {
   std::string sourcePath;
   CameraDescription camera;
   int maxDepth = -1;  // longest path in edges, Mitsuba's convention; -1 = unbounded
+  // Mitsuba's strictNormals (Scene::sidesAgree): paths whose directions the geometric and the
+  // shading normal put on different sides of a surface are dropped. Mitsuba files say so in their
+  // integrator (Mitsuba's default there is false); pbrt files have no such switch and keep this
+  // default; `--shading-normals` overrides either (RenderSettings::shadingNormals).
+  bool strictNormals = true;
   std::vector<BsdfDescription> bsdfs;
   std::vector<TextureDescription> textures;
   std::vector<ShapeDescription> shapes;

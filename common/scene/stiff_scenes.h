@@ -38,6 +38,40 @@ inline void addQuad(ShapeDescription* s, const Vec3f& a, const Vec3f& b, const V
   }
 }
 
+// A sphere as a coarse mesh of `stacks` x `slices` faces (triangles at the poles), facing
+// outwards, whose vertex normals are the sphere's: the shading normal, interpolated across each
+// flat face, parts from the geometric one by up to about pi / stacks, as on any smooth-shaded
+// mesh, and most where the faces are largest.
+inline ShapeDescription smoothSphere(const Vec3f& center, float radius, int stacks, int slices) {
+  ShapeDescription s;
+  auto at = [&](int i, int j) {  // stack line i in 0..stacks, slice line j
+    const float theta = kPi * float(i) / float(stacks), phi = 2 * kPi * float(j) / float(slices);
+    return Vec3f(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
+  };
+  auto vertex = [&](const Vec3f& unit) {
+    s.positions.push_back(center + unit * radius);
+    s.normals.push_back(unit);
+    return uint32_t(s.positions.size() - 1);
+  };
+  // Outwards: (b - a) x (c - a) along the unit vector of a face's centre.
+  auto triangle = [&](uint32_t a, uint32_t b, uint32_t c) {
+    const Vec3f n = cross(s.positions[b] - s.positions[a], s.positions[c] - s.positions[a]);
+    const bool flip = dot(n, s.positions[a] + s.positions[b] + s.positions[c] - center * 3) < 0;
+    s.indices.insert(s.indices.end(), {a, flip ? c : b, flip ? b : c});
+  };
+  std::vector<uint32_t> grid;  // (stacks + 1) x slices vertices; the poles repeated
+  for (int i = 0; i <= stacks; ++i)
+    for (int j = 0; j < slices; ++j) grid.push_back(vertex(at(i, j)));
+  auto g = [&](int i, int j) { return grid[size_t(i * slices + (j % slices))]; };
+  for (int i = 0; i < stacks; ++i) {
+    for (int j = 0; j < slices; ++j) {
+      if (i > 0) triangle(g(i, j), g(i, j + 1), g(i + 1, j));
+      if (i + 1 < stacks) triangle(g(i, j + 1), g(i + 1, j + 1), g(i + 1, j));
+    }
+  }
+  return s;
+}
+
 // The six faces of the box [lo, hi], facing inwards (or outwards), as one mesh.
 inline ShapeDescription box(const Vec3f& lo, const Vec3f& hi, bool outward = false) {
   ShapeDescription s;
@@ -70,6 +104,15 @@ inline BsdfDescription diffuse(float albedo, bool twoSided = true) {
   BsdfDescription b;
   b.reflectance = Spectrum(albedo);
   b.twoSided = twoSided;
+  return b;
+}
+
+// Smooth glass of index `ior` in air.
+inline BsdfDescription glass(float ior) {
+  BsdfDescription b;
+  b.type = BsdfDescription::Type::Dielectric;
+  b.intIOR = ior;
+  b.extIOR = 1;
   return b;
 }
 
@@ -249,6 +292,9 @@ struct Room {
   float plateSize = 0.3f;  // half the plate's side
   // > 0: a smooth glass slab of this index in front of the camera, filling its view.
   float slabIor = 0;
+  // > 0: a glass ball of this index on the floor under the light, a coarse mesh with the
+  // sphere's normals (smoothSphere): its caustic on the floor, and the floor seen through it.
+  float ballIor = 0;
 };
 
 // A 2 x 2 x 2 room (diffuse walls), a sphere light near the ceiling, a camera below it looking
@@ -324,11 +370,7 @@ inline SceneDescription room(const Room& r, int size = 16, int maxDepth = 4) {
   if (r.slabIor > 0) {
     // A slab 0.05 thick across the camera's view, 0.15 in front of it: every camera ray crosses
     // it, and no ray from the light to what the camera sees does.
-    BsdfDescription glass;
-    glass.type = BsdfDescription::Type::Dielectric;
-    glass.intIOR = r.slabIor;
-    glass.extIOR = 1;
-    d.bsdfs.push_back(glass);
+    d.bsdfs.push_back(glass(r.slabIor));
     const Matrix4& c = d.camera.toWorld;
     const Vec3f eye = Vec3f(c.m[0][3], c.m[1][3], c.m[2][3]) / s;  // at scale 1
     const Vec3f forward = normalize(c.applyVector(Vec3f(0, 0, 1)));
@@ -356,6 +398,12 @@ inline SceneDescription room(const Room& r, int size = 16, int maxDepth = 4) {
     }
     slab.bsdf = int(d.bsdfs.size()) - 1;
     d.shapes.push_back(slab);
+  }
+  if (r.ballIor > 0) {
+    d.bsdfs.push_back(glass(r.ballIor));
+    ShapeDescription ball = smoothSphere(Vec3f(0.15f, -0.6f, 0.2f) * s, 0.35f * s, 4, 6);
+    ball.bsdf = int(d.bsdfs.size()) - 1;
+    d.shapes.push_back(ball);
   }
   ShapeDescription light;
   light.type = ShapeDescription::Type::Sphere;

@@ -46,7 +46,7 @@ int BidirectionalTracer::mediumToward(const PathVertex& v, const Vec3f& w) const
 Spectrum BidirectionalTracer::scatterValue(const PathVertex& v, const Vec3f& w,
                                            TransportMode mode) const {
   if (inMedium(v)) return Spectrum(scene_.medium(v.medium).phase().eval(v.wo, w));
-  if (!sidesAgree(w, v.n, v.ns)) return Spectrum(0.0f);
+  if (!scene_.sidesAgree(w, v.n, v.ns)) return Spectrum(0.0f);
   const Frame frame(v.ns);
   return scene_.bsdfAt(v.shape, v.uv).eval(frame.toLocal(v.wo), frame.toLocal(w), mode);
 }
@@ -133,13 +133,13 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, int me
       ray = Ray{v.p, wi};
     } else {
       const Bsdf& bsdf = scene_.bsdfAt(hit.shape, hit.uv);
-      if (bsdf.isBlack() || !sidesAgree(v.wo, v.n, v.ns)) break;
+      if (bsdf.isBlack() || !scene_.sidesAgree(v.wo, v.n, v.ns)) break;
       Frame frame(v.ns);
       Vec3f wo = frame.toLocal(v.wo);
       BsdfSample bs;
       if (!bsdf.sample(wo, u, mode, &bs)) break;
       wi = frame.toWorld(bs.wi);
-      if (!sidesAgree(wi, v.n, v.ns)) break;
+      if (!scene_.sidesAgree(wi, v.n, v.ns)) break;
       if (bs.delta) {
         // Dirac lobes: densities are not comparable with other strategies; the MIS weights skip
         // connections at this vertex and treat its densities as one (Veach 1997, 10.3.5).

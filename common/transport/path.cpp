@@ -165,7 +165,7 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth,
       f.multiply(double(medium.phase().eval(wo, wi)));
       continue;
     }
-    if (!sidesAgree(wi, v.n, v.ns) || !sidesAgree(wo, v.n, v.ns)) return out;
+    if (!scene.sidesAgree(wi, v.n, v.ns) || !scene.sidesAgree(wo, v.n, v.ns)) return out;
     const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
     Frame frame(v.ns);
     Vec3f lo = frame.toLocal(wo), li = frame.toLocal(wi);

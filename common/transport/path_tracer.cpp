@@ -201,7 +201,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     if (depth >= maxDepth_) break;
 
     const Bsdf& bsdf = scene_.bsdfAt(hit.shape, hit.uv);
-    if (bsdf.isBlack() || !sidesAgree(-ray.d, hit.ng, hit.ns)) break;
+    if (bsdf.isBlack() || !scene_.sidesAgree(-ray.d, hit.ng, hit.ns)) break;
     Frame frame(hit.ns);
     Vec3f wo = frame.toLocal(-ray.d);
 
@@ -212,7 +212,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       nextEvent(
           hit.p, hit.ng, beta, uLight, sampler,
           [&](const Vec3f& wiW, Spectrum* f, float* pdf, int* toward) {
-            if (!sidesAgree(wiW, hit.ng, hit.ns)) return false;
+            if (!scene_.sidesAgree(wiW, hit.ng, hit.ns)) return false;
             const Vec3f wi = frame.toLocal(wiW);
             *f = bsdf.eval(wo, wi, TransportMode::Radiance) * std::fabs(wi.z);
             if (isBlack(*f)) return false;
@@ -229,7 +229,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     BsdfSample bs;
     if (!bsdf.sample(wo, u, TransportMode::Radiance, &bs)) break;
     Vec3f wiWorld = frame.toWorld(bs.wi);
-    if (!sidesAgree(wiWorld, hit.ng, hit.ns)) break;
+    if (!scene_.sidesAgree(wiWorld, hit.ng, hit.ns)) break;
     beta *= bs.weight;
     if (isBlack(beta)) break;
     previousDelta = bs.delta;

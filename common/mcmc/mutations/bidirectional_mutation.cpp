@@ -86,13 +86,13 @@ bool scatterStep(const MutationContext& context, const PathVertex& at, const Pat
     return flyVertex(context, at, at.medium, w, rng, next);
   }
   const Bsdf& bsdf = scene.bsdfAt(at.shape, at.uv);
-  if (bsdf.isBlack() || !sidesAgree(woWorld, at.n, at.ns)) return false;
+  if (bsdf.isBlack() || !scene.sidesAgree(woWorld, at.n, at.ns)) return false;
   Frame frame(at.ns);
   float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
   BsdfSample bs;
   if (!bsdf.sample(frame.toLocal(woWorld), u, mode, &bs)) return false;
   Vec3f w = normalize(frame.toWorld(bs.wi));
-  if (!sidesAgree(w, at.n, at.ns)) return false;
+  if (!scene.sidesAgree(w, at.n, at.ns)) return false;
   return flyVertex(context, at, mediumLeaving(scene, at, w, around), w, rng, next);
 }
 

@@ -52,13 +52,13 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
     if (!bsdf.isDelta()) break;
     if (int(walk.size()) > kMaxSpecularChain) return false;
     Vec3f wo = normalize(previous.p - v.p);
-    if (!sidesAgree(wo, v.n, v.ns)) return false;
+    if (!scene.sidesAgree(wo, v.n, v.ns)) return false;
     Frame frame(v.ns);
     float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
     BsdfSample bs;
     if (!bsdf.sample(frame.toLocal(wo), u, TransportMode::Radiance, &bs)) return false;
     w = normalize(frame.toWorld(bs.wi));
-    if (!sidesAgree(w, v.n, v.ns)) return false;
+    if (!scene.sidesAgree(w, v.n, v.ns)) return false;
     if (scene.hasMedia()) medium = mediumLeaving(scene, v, w, v.medium);
     previous = v;
   }

@@ -108,13 +108,13 @@ bool isReflection(const Path& x, int i) {
 bool specularBounce(const Scene& scene, const PathVertex& at, const Vec3f& from, bool reflection,
                     Vec3f* w) {
   Vec3f wo = normalize(from - at.p);
-  if (!sidesAgree(wo, at.n, at.ns)) return false;
+  if (!scene.sidesAgree(wo, at.n, at.ns)) return false;
   Frame frame(at.ns);
   Vec3f local;
   if (!scene.bsdfOf(at.shape).specularDirection(frame.toLocal(wo), reflection, &local))
     return false;
   *w = normalize(frame.toWorld(local));
-  return sidesAgree(*w, at.n, at.ns);
+  return scene.sidesAgree(*w, at.n, at.ns);
 }
 
 Vec3f tracedDirection(const Scene& scene, const PathVertex& from, const PathVertex& to) {

@@ -150,6 +150,7 @@ class MitsubaLoader {
       fail(root, "the root element must be <scene>, not <" + std::string(root.name()) + ">");
     checkVersion(root);
     collectDeclaredIds(root);
+    scene_.strictNormals = false;  // Mitsuba's default, without an integrator that says otherwise
     bool sawSensor = false, sawIntegrator = false;
     for (pugi::xml_node child : root.children()) {
       if (child.type() != pugi::node_element) continue;
@@ -554,9 +555,13 @@ class MitsubaLoader {
   // ---- Objects ----
 
   void parseIntegrator(const pugi::xml_node& node) {
-    // Only the path length matters to the farm: it picks its own algorithms (see the render plan).
+    // Only the path length and the shading-normal convention matter to the farm: it picks its own
+    // algorithms (see the render plan).
     std::vector<pugi::xml_node> nested;
     PropertySet props = collectProperties(node, &nested);
+    // Mitsuba's Monte Carlo integrators default strictNormals to false (set before the scene is
+    // read); the file's value holds, from whichever integrator, wrapping or wrapped, says it.
+    scene_.strictNormals = getBoolean(props, "strictNormals", scene_.strictNormals);
     if (pugi::xml_node n = props.take("maxDepth")) {
       long long depth = getIntegerFrom(n, "maxDepth");
       if (depth < -1 || depth > 1000000) fail(n, "maxDepth must be -1 (unbounded) or >= 0");

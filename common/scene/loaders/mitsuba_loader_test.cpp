@@ -421,6 +421,42 @@ TEST(MitsubaLoaderTest, ThinlensSensor) {
             std::string::npos);
 }
 
+// The integrator's strictNormals, as Mitsuba reads it: false when no integrator says it, the
+// wrapped integrator's where it says it and the wrapper's otherwise; not a boolean, an error.
+TEST(MitsubaLoaderTest, StrictNormalsFromTheIntegrator) {
+  TempDir dir;
+  auto strict = [&](const std::string& integrator) {
+    return loadMitsubaScene(
+               dir.write("s.xml", sceneXml(integrator + "<shape type=\"rectangle\"/>\n")))
+        .strictNormals;
+  };
+  EXPECT_FALSE(strict(""));
+  EXPECT_FALSE(strict("<integrator type=\"path\"/>\n"));
+  EXPECT_TRUE(strict(
+      "<integrator type=\"path\"><boolean name=\"strictNormals\" value=\"true\"/></integrator>\n"));
+  EXPECT_FALSE(
+      strict("<integrator type=\"path\"><boolean name=\"strictNormals\" "
+             "value=\"false\"/></integrator>\n"));
+  EXPECT_TRUE(
+      strict("<integrator type=\"adaptive\"><boolean name=\"strictNormals\" "
+             "value=\"true\"/><integrator type=\"path\"/></integrator>\n"));
+  EXPECT_FALSE(
+      strict("<integrator type=\"adaptive\"><boolean name=\"strictNormals\" "
+             "value=\"true\"/><integrator type=\"path\"><boolean "
+             "name=\"strictNormals\" value=\"false\"/></integrator></integrator>\n"));
+  // With a maxDepth beside it, too (the loader stops at an integrator's maxDepth).
+  EXPECT_TRUE(
+      strict("<integrator type=\"path\"><integer name=\"maxDepth\" value=\"5\"/><boolean "
+             "name=\"strictNormals\" value=\"true\"/></integrator>\n"));
+  for (const char* scene : {"cornell-box", "veach-mis", "veach-bidir", "water-caustic"})
+    EXPECT_TRUE(loadMitsubaScene(scenePath(scene)).strictNormals) << scene;
+  EXPECT_NE(loadError(dir.write("s.xml", sceneXml("<integrator type=\"path\"><boolean "
+                                                  "name=\"strictNormals\" value=\"yes\"/>"
+                                                  "</integrator>\n<shape type=\"rectangle\"/>\n")))
+                .find("'strictNormals': 'yes' is not a boolean"),
+            std::string::npos);
+}
+
 TEST(MitsubaLoaderTest, SensorOptionsAndBsdfVariants) {
   TempDir dir;
   std::string xml = dir.write("s.xml", sceneXml(R"(<integrator type="path"/>
