@@ -527,10 +527,13 @@ int runCompareCommand(const std::string& scene, const std::string& algorithms,
 }
 
 int runPlan(const std::string& scenePath, const std::string& algorithm,
-            const std::string& mutationMix, double time, int width, int height, bool pilot,
-            bool json) {
+            const std::string& mutationMix, const std::string& shadingNormals, double time,
+            int width, int height, bool pilot, bool json) {
   farm::RenderSettings settings;
   std::string error;
+  if (!farm::parseShadingNormals(shadingNormals, &settings.shadingNormals))
+    return fail("--shading-normals must be scene, strict or lax, not '" + shadingNormals + "'",
+                kUsageError);
   settings.autoAlgorithm = algorithm == "auto";
   if (!settings.autoAlgorithm && !farm::parseAlgorithm(algorithm, &settings.algorithm)) {
     return fail(std::string("--algorithm must be ") + farm::algorithmList() + " or auto, not '" +
@@ -714,7 +717,7 @@ int main(int argc, char** argv) {
       "environment, media) and the render it implies: the algorithm (auto: the candidates, or "
       "with --pilot the pilot's pick and figures), mlt's mutation weights, and each part in or "
       "left out, and why");
-  std::string planScene, planAlgorithm = "auto", planMix;
+  std::string planScene, planAlgorithm = "auto", planMix, planNormals = "scene";
   double planTime = 0;
   int planWidth = 0, planHeight = 0;
   bool planPilot = false;
@@ -733,6 +736,10 @@ int main(int argc, char** argv) {
       ->default_str("0");
   planCommand->add_option("--width", planWidth, "film width for the pilot (default: the scene's)");
   planCommand->add_option("--height", planHeight, "film height for the pilot");
+  planCommand
+      ->add_option("--shading-normals", planNormals,
+                   "scene, strict or lax: the convention to plan for (see `farm render --help`)")
+      ->default_str("scene");
   planCommand->add_flag("--json", json, "print JSON instead of text");
 
   // cancel, list
@@ -767,8 +774,8 @@ int main(int argc, char** argv) {
   }
   if (*report) return runReportCommand(address, job, reportJobDir);
   if (*planCommand)
-    return runPlan(planScene, planAlgorithm, planMix, planTime, planWidth, planHeight, planPilot,
-                   json);
+    return runPlan(planScene, planAlgorithm, planMix, planNormals, planTime, planWidth, planHeight,
+                   planPilot, json);
   if (*submit) return runSubmit(address, submitScene, submitOptions);
   if (*status) return runStatus(address, job, json);
   if (*fetch) return runFetch(address, job, fetchOutput, timeout);

@@ -102,8 +102,8 @@ TEST(FarmPlan, EachSharedSceneNamesWhatItLeavesOut) {
                                  seconds(60), scratch.path());
     ASSERT_EQ(r.exitCode, 0) << scene << ": " << r.err;
     for (const char* what :
-         {"surfaces: ", "lights: ", "camera: pinhole", "textures: ", "environment: none",
-          "media: 0 homogeneous, 0 grid", "algorithm: mlt (requested)",
+         {"surfaces: ", "lights: ", "camera: pinhole", "textures: ", "shading normals: strict, ",
+          "environment: none", "media: 0 homogeneous, 0 grid", "algorithm: mlt (requested)",
           "mutations: bidir=", "left out: lens sampling (pinhole camera",
           "left out: escaped-path handling (no environment", "left out: medium tracking (no media"})
       EXPECT_NE(r.out.find(what), std::string::npos) << scene << " lacks '" << what << "':\n"

@@ -226,6 +226,12 @@ std::vector<std::string> RenderPlan::describe() const {
   out.push_back(std::string("camera: ") +
                 (s.thinLens ? "thin lens, radius " + number(s.lensRadius) : "pinhole"));
   out.push_back("textures: " + std::to_string(s.texturedBsdfs) + " textured BSDF(s)");
+  out.push_back(std::string("shading normals: ") + (s.strictNormals ? "strict, " : "lax, ") +
+                std::to_string(s.smoothShapes) + " smooth-shaded shape(s)" +
+                (s.strictNormals && s.smoothShapes > 0
+                     ? " (paths whose directions a shape's two normals put on different sides "
+                       "end there; --shading-normals lax keeps them)"
+                     : ""));
   out.push_back(std::string("environment: ") +
                 (s.environment ? (s.environmentMap ? "map" : "constant") : "none"));
   out.push_back("media: " + std::to_string(s.homogeneousMedia) + " homogeneous, " +

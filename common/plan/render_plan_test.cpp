@@ -50,6 +50,35 @@ void expectNamedLeftOuts(const RenderPlan& p, const std::string& scene) {
   EXPECT_GT(leftOut, 0u) << scene << ": every shared scene lacks something";
 }
 
+// The plan names the shading-normal convention and the smooth-shaded shapes it applies to (those
+// whose vertex normals part from their faces'): the water's surface, under the file's strict
+// normals unless the settings say lax.
+TEST(RenderPlan, NamesTheShadingNormalConvention) {
+  const std::string water = kShared + "/scenes/water-caustic/scene.xml";
+  auto line = [](const RenderPlan& p) {
+    for (const std::string& l : p.describe())
+      if (l.rfind("shading normals: ", 0) == 0) return l;
+    return std::string();
+  };
+  const RenderPlan strict = plan(water, Algorithm::MLT, false);
+  EXPECT_TRUE(strict.scene.strictNormals);
+  EXPECT_GE(strict.scene.smoothShapes, 1);
+  EXPECT_EQ(line(strict).rfind("shading normals: strict, ", 0), 0u) << line(strict);
+  EXPECT_NE(line(strict).find("--shading-normals lax keeps them"), std::string::npos);
+  RenderSettings settings;
+  settings.algorithm = Algorithm::MLT;
+  settings.shadingNormals = ShadingNormals::Lax;
+  const RenderPlan lax =
+      planRender(analyseScene(*loadScene(water, settings)), Algorithm::MLT, false, MutationMix());
+  EXPECT_FALSE(lax.scene.strictNormals);
+  EXPECT_EQ(line(lax), "shading normals: lax, " + std::to_string(strict.scene.smoothShapes) +
+                           " smooth-shaded shape(s)");
+  // The Cornell box's OBJ walls carry vertex normals, their faces' own: nothing to disagree on.
+  const RenderPlan cornell = plan(kShared + "/scenes/cornell-box/scene.xml", Algorithm::MLT, false);
+  EXPECT_EQ(cornell.scene.smoothShapes, 0);
+  EXPECT_EQ(line(cornell), "shading normals: strict, 0 smooth-shaded shape(s)");
+}
+
 TEST(RenderPlan, CornellBoxIsDiffuseUnderOneLargeLight) {
   const std::string path = kShared + "/scenes/cornell-box/scene.xml";
   const RenderPlan p = plan(path, Algorithm::MLT, false);

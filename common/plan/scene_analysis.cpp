@@ -98,6 +98,25 @@ bool SceneAnalysis::specularDiffuseSpecular() const {
   return hasSpecular() && smallLights && specularSeen >= 0.05 && specularLit >= 0.05;
 }
 
+// Whether a mesh's vertex normals part from its faces' normals anywhere (by more than about half
+// a degree): only then can the two normals disagree on a side. Many meshes carry vertex normals
+// that are their flat faces' (the Cornell box's OBJ walls).
+static bool isSmoothShaded(const ShapeDescription& s) {
+  if (s.normals.empty() || s.faceNormals || s.normals.size() != s.positions.size()) return false;
+  for (size_t t = 0; t + 2 < s.indices.size(); t += 3) {
+    const Vec3f& p0 = s.positions[s.indices[t]];
+    const Vec3f n = cross(s.positions[s.indices[t + 1]] - p0, s.positions[s.indices[t + 2]] - p0);
+    const float len = length(n);
+    if (!(len > 0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3f& vn = s.normals[s.indices[t + size_t(k)]];
+      const float vl = length(vn);
+      if (vl > 0 && std::fabs(dot(n, vn)) < 0.99995f * len * vl) return true;
+    }
+  }
+  return false;
+}
+
 SceneAnalysis analyseScene(const Scene& scene) {
   const SceneDescription& d = scene.description();
   SceneAnalysis a;
@@ -119,6 +138,8 @@ SceneAnalysis analyseScene(const Scene& scene) {
     }
   }
   for (const BsdfDescription& b : d.bsdfs) a.texturedBsdfs += b.reflectanceTexture >= 0;
+  for (const ShapeDescription& s : d.shapes) a.smoothShapes += isSmoothShaded(s);
+  a.strictNormals = scene.strictNormals();
 
   const double diameter = 2.0 * double(scene.extent());
   double total = 0;

@@ -45,6 +45,11 @@ struct SceneAnalysis {
   bool thinLens = false;
   float lensRadius = 0;
   int texturedBsdfs = 0;  // BSDFs whose reflectance a texture gives
+  // Shapes shaded by interpolated vertex normals, and the convention the scene renders them
+  // with (Scene::sidesAgree): strict normals drop the paths whose directions a shape's two
+  // normals put on different sides of it.
+  int smoothShapes = 0;
+  bool strictNormals = true;
   bool environment = false, environmentMap = false;
   int homogeneousMedia = 0, gridMedia = 0;
   int maxDepth = -1;
