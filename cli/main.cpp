@@ -181,6 +181,14 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                       "relative MSE against it");
 }
 
+// --shading-normals, shared by the render options and `farm plan`; false with *error otherwise.
+bool parseShadingNormalsOption(const std::string& value, farm::ShadingNormals* out,
+                               std::string* error) {
+  if (farm::parseShadingNormals(value, out)) return true;
+  *error = "--shading-normals must be scene, strict or lax, not '" + value + "'";
+  return false;
+}
+
 // Checks the option values with the user's names for them; false with *error otherwise.
 bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* error) {
   s->autoAlgorithm = o.algorithm == "auto";
@@ -190,10 +198,7 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     return false;
   }
   s->ignorePlan = o.noPlan;
-  if (!farm::parseShadingNormals(o.shadingNormals, &s->shadingNormals)) {
-    *error = "--shading-normals must be scene, strict or lax, not '" + o.shadingNormals + "'";
-    return false;
-  }
+  if (!parseShadingNormalsOption(o.shadingNormals, &s->shadingNormals, error)) return false;
   constexpr int64_t kMaxPerPixel = int64_t(1) << 24;
   if (o.spp < 1 || o.spp > kMaxPerPixel) {
     *error = "--spp must be between 1 and " + std::to_string(kMaxPerPixel) + ", not " +
@@ -531,9 +536,8 @@ int runPlan(const std::string& scenePath, const std::string& algorithm,
             int width, int height, bool pilot, bool json) {
   farm::RenderSettings settings;
   std::string error;
-  if (!farm::parseShadingNormals(shadingNormals, &settings.shadingNormals))
-    return fail("--shading-normals must be scene, strict or lax, not '" + shadingNormals + "'",
-                kUsageError);
+  if (!parseShadingNormalsOption(shadingNormals, &settings.shadingNormals, &error))
+    return fail(error, kUsageError);
   settings.autoAlgorithm = algorithm == "auto";
   if (!settings.autoAlgorithm && !farm::parseAlgorithm(algorithm, &settings.algorithm)) {
     return fail(std::string("--algorithm must be ") + farm::algorithmList() + " or auto, not '" +

@@ -39,6 +39,14 @@ double capped(double v, double cap) {
 
 }  // namespace
 
+double meanCap(const Image& reference) {
+  // A tiny directly visible light (a few pixels of 1e4) would otherwise decide the means alone.
+  const double percentile =
+      numpyPercentile(std::vector<double>(reference.rgb.begin(), reference.rgb.end()), 99.9);
+  // Python's max(p, 1e-6) returns p when p is NaN (NaN > 1e-6 is false), and so do we.
+  return std::isnan(percentile) ? percentile : std::max(percentile, 1e-6);
+}
+
 bool compareImages(const Image& image, const Image& reference, ErrorMetrics* out,
                    std::string* error) {
   auto fail = [&](const std::string& message) {
@@ -55,12 +63,7 @@ bool compareImages(const Image& image, const Image& reference, ErrorMetrics* out
   if (count == 0) return fail("empty images");
 
   ErrorMetrics m;
-  // The reference's 99.9th percentile over all channel values: a tiny directly visible light (a few
-  // pixels of 1e4) would otherwise decide the means alone.
-  std::vector<double> refValues(reference.rgb.begin(), reference.rgb.end());
-  const double percentile = numpyPercentile(std::move(refValues), 99.9);
-  // Python's max(p, 1e-6) returns p when p is NaN (NaN > 1e-6 is false), and so do we.
-  const double cap = std::isnan(percentile) ? percentile : std::max(percentile, 1e-6);
+  const double cap = meanCap(reference);
 
   double sumMean[3] = {0, 0, 0}, sumRefMean[3] = {0, 0, 0};
   double sumSq = 0, sumRel = 0;

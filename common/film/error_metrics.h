@@ -17,6 +17,11 @@ struct ErrorMetrics {
   long nonFinite = 0, negative = 0;     // counts of channel values
 };
 
+// The value channel means are capped at: the reference's 99.9th percentile over all channel
+// values (numpy.percentile's, as imgcmp.py takes it), at least 1e-6; NaN when the reference holds
+// a NaN.
+double meanCap(const Image& reference);
+
 // Returns false (and sets *error) when the sizes differ.
 bool compareImages(const Image& image, const Image& reference, ErrorMetrics* out,
                    std::string* error);
