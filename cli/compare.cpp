@@ -134,7 +134,7 @@ Status runCompare(const CompareOptions& o, CompareResult* result) {
   std::unique_ptr<FarmClient> client;
   LocalBundle bundle;
   if (!o.coordinator.empty()) {
-    client = std::make_unique<FarmClient>(o.coordinator);
+    client = std::make_unique<FarmClient>(o.coordinator, o.security);
     if (Status s = client->connect(5); !s.isOk()) return s;
     std::string error;
     if (!collectSceneBundle(o.scene, &bundle, &error, {})) return Status::invalidArgument(error);
@@ -189,9 +189,9 @@ Status runCompare(const CompareOptions& o, CompareResult* result) {
                              o.scene, o.reference, result);
 }
 
-Status runJobReport(const std::string& coordinator, const std::string& jobId,
-                    const std::string& reportDir, CompareResult* result) {
-  FarmClient client(coordinator);
+Status runJobReport(const std::string& coordinator, const ClientSecurity& security,
+                    const std::string& jobId, const std::string& reportDir, CompareResult* result) {
+  FarmClient client(coordinator, security);
   if (Status s = client.connect(5); !s.isOk()) return s;
   JobProgress progress;
   if (Status s = client.progress(jobId, 0, &progress); !s.isOk()) return s;

@@ -15,6 +15,7 @@
 
 #include "cli/report_page.h"
 #include "coordinator/status.h"
+#include "proto/transport_security.h"
 
 namespace farm {
 
@@ -28,6 +29,7 @@ struct AlgorithmChoice {
 struct CompareOptions {
   std::string scene, reference, reportDir;
   std::string coordinator;  // HOST:PORT, or empty: render here
+  ClientSecurity security;  // what to present to that coordinator
   std::vector<AlgorithmChoice> algorithms;
   RenderSettings settings;  // all but the algorithm, shared by every job
   int threads = 1;          // embedded
@@ -45,8 +47,8 @@ Status runCompare(const CompareOptions& options, CompareResult* result);
 
 // `farm report JOB DIR`: a coordinator job's series, settings and (once done) image, as a
 // report directory of one entry.
-Status runJobReport(const std::string& coordinator, const std::string& jobId,
-                    const std::string& reportDir, CompareResult* result);
+Status runJobReport(const std::string& coordinator, const ClientSecurity& security,
+                    const std::string& jobId, const std::string& reportDir, CompareResult* result);
 
 // "pt,bdpt,mlt,auto" -> algorithms, each once, in order; false with *error naming the bad one.
 bool parseAlgorithms(const std::string& list, std::vector<AlgorithmChoice>* out,

@@ -11,6 +11,7 @@
 #include "proto/convert.h"
 #include "proto/farm.grpc.pb.h"
 #include "proto/sha256.h"
+#include "proto/transport_security.h"
 #include "proto/wire_limits.h"
 
 namespace farm {
@@ -87,6 +88,8 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
 
 struct FarmClient::Impl {
   std::string address;
+  std::string setupError;  // a TLS or token file that could not be used; no channel then
+  bool tls = false;
   std::shared_ptr<grpc::Channel> channel;
   std::unique_ptr<v1::ClientApi::Stub> stub;
 
@@ -106,35 +109,51 @@ struct FarmClient::Impl {
         return {StatusCode::kFailedPrecondition, s.error_message()};
       case grpc::StatusCode::DATA_LOSS:
         return {StatusCode::kDataLoss, s.error_message()};
+      case grpc::StatusCode::UNAUTHENTICATED:
+        return {StatusCode::kUnauthenticated,
+                "the coordinator at " + address + " refused the call: " + s.error_message()};
+      case grpc::StatusCode::PERMISSION_DENIED:
+        return {StatusCode::kPermissionDenied,
+                "the coordinator at " + address + " refused the call: " + s.error_message()};
       default:
         return {StatusCode::kInternal, "coordinator at " + address + ": " + s.error_message()};
     }
   }
 };
 
-FarmClient::FarmClient(const std::string& address) : impl_(new Impl) {
+FarmClient::FarmClient(const std::string& address, const ClientSecurity& security)
+    : impl_(new Impl) {
   impl_->address = address;
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(kMaxMessageBytes);
   args.SetMaxSendMessageSize(kMaxMessageBytes);
-  impl_->channel = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
-  impl_->stub = v1::ClientApi::NewStub(impl_->channel);
+  impl_->tls = !security.caFile.empty();
+  impl_->channel = makeClientChannel(address, security, args, &impl_->setupError);
+  if (impl_->channel) impl_->stub = v1::ClientApi::NewStub(impl_->channel);
 }
 
 FarmClient::~FarmClient() = default;
 
 Status FarmClient::connect(double seconds) {
+  if (!impl_->stub) return {StatusCode::kInvalidArgument, impl_->setupError};
   const auto deadline = std::chrono::system_clock::now() +
                         std::chrono::duration_cast<std::chrono::system_clock::duration>(
                             std::chrono::duration<double>(seconds));
   if (!impl_->channel->WaitForConnected(deadline)) {
-    return {StatusCode::kUnavailable, "cannot reach the coordinator at " + impl_->address +
-                                          " (is farm-coordinator running there?)"};
+    // A failed TLS handshake looks the same from here as no listener: name both.
+    return {StatusCode::kUnavailable,
+            "cannot reach the coordinator at " + impl_->address +
+                (impl_->tls ? " (is farm-coordinator running there, does its certificate verify "
+                              "against --tls-ca and name the host dialled, and does it accept "
+                              "this client's certificate?)"
+                            : " (is farm-coordinator running there? if it serves TLS, pass "
+                              "--tls-ca)")};
   }
   return Status::ok();
 }
 
 Status FarmClient::submit(const Submission& submission, std::string* jobId, SubmitStats* stats) {
+  if (!impl_->stub) return {StatusCode::kInvalidArgument, impl_->setupError};
   const LocalBundle& bundle = submission.bundle;
   // Every blob by hash, with where to read it: identical files are sent once.
   std::map<std::string, std::string> localByHash;
@@ -212,6 +231,7 @@ Status FarmClient::submit(const Submission& submission, std::string* jobId, Subm
 }
 
 Status FarmClient::progress(const std::string& jobId, uint32_t errorSeriesFrom, JobProgress* out) {
+  if (!impl_->stub) return {StatusCode::kInvalidArgument, impl_->setupError};
   v1::GetProgressRequest request;
   request.set_job_id(jobId);
   request.set_error_series_from(errorSeriesFrom);
@@ -225,6 +245,7 @@ Status FarmClient::progress(const std::string& jobId, uint32_t errorSeriesFrom, 
 }
 
 Status FarmClient::fetchImage(const std::string& jobId, bool wait, const std::string& path) {
+  if (!impl_->stub) return {StatusCode::kInvalidArgument, impl_->setupError};
   v1::FetchImageRequest request;
   request.set_job_id(jobId);
   request.set_wait(wait);
@@ -260,6 +281,7 @@ Status FarmClient::fetchImage(const std::string& jobId, bool wait, const std::st
 }
 
 Status FarmClient::cancel(const std::string& jobId, JobPhase* phase) {
+  if (!impl_->stub) return {StatusCode::kInvalidArgument, impl_->setupError};
   v1::CancelJobRequest request;
   request.set_job_id(jobId);
   v1::CancelJobResponse response;
@@ -272,6 +294,7 @@ Status FarmClient::cancel(const std::string& jobId, JobPhase* phase) {
 }
 
 Status FarmClient::list(std::vector<JobProgress>* jobs) {
+  if (!impl_->stub) return {StatusCode::kInvalidArgument, impl_->setupError};
   v1::ListJobsResponse response;
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + kUnaryDeadline);

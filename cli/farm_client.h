@@ -10,6 +10,7 @@
 #include "cli/scene_bundle.h"
 #include "coordinator/job.h"
 #include "coordinator/status.h"
+#include "proto/transport_security.h"
 
 namespace farm {
 
@@ -28,7 +29,9 @@ struct SubmitStats {
 
 class FarmClient {
  public:
-  explicit FarmClient(const std::string& address);
+  // `security`: the TLS roots, client certificate and token to present (none: plaintext).
+  // A file that cannot be used makes every call fail with a message naming it.
+  explicit FarmClient(const std::string& address, const ClientSecurity& security = {});
   ~FarmClient();
 
   // Checks that the coordinator answers within `seconds`.

@@ -368,13 +368,34 @@ int runRender(const std::string& scene, const std::string& output, const RenderO
   return 0;
 }
 
+// The flags of every command that talks to a coordinator: TLS roots, a client certificate for
+// a coordinator that asks for one, and the submit token (proto/transport_security.h).
+void addClientSecurity(CLI::App* command, farm::ClientSecurity* security) {
+  command
+      ->add_option("--tls-ca", security->caFile,
+                   "PEM CA certificates to verify the coordinator's TLS certificate against "
+                   "(default: plaintext)")
+      ->envname("FARM_TLS_CA");
+  command
+      ->add_option("--tls-cert", security->certFile,
+                   "PEM client certificate, for a coordinator that asks for one (with --tls-key)")
+      ->envname("FARM_TLS_CERT");
+  command->add_option("--tls-key", security->keyFile, "PEM private key of --tls-cert")
+      ->envname("FARM_TLS_KEY");
+  command
+      ->add_option("--token-file", security->tokenFile,
+                   "file whose first line is the coordinator's submit token")
+      ->envname("FARM_TOKEN_FILE");
+}
+
 int connectTo(farm::FarmClient& client) {
   Status s = client.connect(5);
   if (!s.isOk()) return fail(s.message());
   return 0;
 }
 
-int runSubmit(const std::string& address, const std::string& scene, const RenderOptions& options) {
+int runSubmit(const std::string& address, const farm::ClientSecurity& security,
+              const std::string& scene, const RenderOptions& options) {
   farm::Submission submission;
   std::string error;
   if (!toSettings(options, &submission.settings, &error)) return fail(error, kUsageError);
@@ -385,7 +406,7 @@ int runSubmit(const std::string& address, const std::string& scene, const Render
   }
   submission.referencePath = options.reference;
   submission.name = fs::path(scene).filename().string();
-  farm::FarmClient client(address);
+  farm::FarmClient client(address, security);
   if (int rc = connectTo(client)) return rc;
   std::string jobId;
   farm::SubmitStats stats;
@@ -404,8 +425,9 @@ Status latestProgress(farm::FarmClient& client, const std::string& job, farm::Jo
   return s;
 }
 
-int runStatus(const std::string& address, const std::string& job, bool json) {
-  farm::FarmClient client(address);
+int runStatus(const std::string& address, const farm::ClientSecurity& security,
+              const std::string& job, bool json) {
+  farm::FarmClient client(address, security);
   if (int rc = connectTo(client)) return rc;
   farm::JobProgress p;
   Status s = latestProgress(client, job, &p);
@@ -418,11 +440,11 @@ int runStatus(const std::string& address, const std::string& job, bool json) {
   return 0;
 }
 
-int runFetch(const std::string& address, const std::string& job, const std::string& output,
-             double timeout) {
+int runFetch(const std::string& address, const farm::ClientSecurity& security,
+             const std::string& job, const std::string& output, double timeout) {
   std::string error;
   if (!checkOutputPath(output, &error)) return fail(error, kUsageError);
-  farm::FarmClient client(address);
+  farm::FarmClient client(address, security);
   if (int rc = connectTo(client)) return rc;
   catchInterrupts();
   const auto start = std::chrono::steady_clock::now();
@@ -462,8 +484,9 @@ int runFetch(const std::string& address, const std::string& job, const std::stri
   return 0;
 }
 
-int runCancel(const std::string& address, const std::string& job) {
-  farm::FarmClient client(address);
+int runCancel(const std::string& address, const farm::ClientSecurity& security,
+              const std::string& job) {
+  farm::FarmClient client(address, security);
   if (int rc = connectTo(client)) return rc;
   farm::JobPhase phase;
   Status s = client.cancel(job, &phase);
@@ -472,8 +495,8 @@ int runCancel(const std::string& address, const std::string& job) {
   return 0;
 }
 
-int runList(const std::string& address) {
-  farm::FarmClient client(address);
+int runList(const std::string& address, const farm::ClientSecurity& security) {
+  farm::FarmClient client(address, security);
   if (int rc = connectTo(client)) return rc;
   std::vector<farm::JobProgress> jobs;
   Status s = client.list(&jobs);
@@ -493,7 +516,8 @@ int runList(const std::string& address) {
 }
 
 int runCompareCommand(const std::string& scene, const std::string& algorithms,
-                      const RenderOptions& options, const std::string& coordinator, int threads,
+                      const RenderOptions& options, const std::string& coordinator,
+                      const farm::ClientSecurity& security, int threads,
                       const std::string& reportDir) {
   farm::CompareOptions compare;
   std::string error;
@@ -507,6 +531,7 @@ int runCompareCommand(const std::string& scene, const std::string& algorithms,
   compare.reference = options.reference;
   compare.reportDir = reportDir;
   compare.coordinator = coordinator;
+  compare.security = security;
   compare.threads = threads;
   ProgressDisplay display;
   std::string current;
@@ -600,10 +625,10 @@ int runPlan(const std::string& scenePath, const std::string& algorithm,
   return 0;
 }
 
-int runReportCommand(const std::string& coordinator, const std::string& job,
-                     const std::string& reportDir) {
+int runReportCommand(const std::string& coordinator, const farm::ClientSecurity& security,
+                     const std::string& job, const std::string& reportDir) {
   farm::CompareResult result;
-  Status s = farm::runJobReport(coordinator, job, reportDir, &result);
+  Status s = farm::runJobReport(coordinator, security, job, reportDir, &result);
   if (!s.isOk()) return fail(s.message());
   if (!result.warning.empty()) std::cerr << "farm: warning: " << result.warning << "\n";
   std::cout << "wrote " << (fs::path(reportDir) / "index.html").string() << "\n";
@@ -645,6 +670,8 @@ int main(int argc, char** argv) {
                      "directory for error_vs_time.csv (elapsed_seconds,samples,rmse,relmse,"
                      "estimated_relmse; rmse and relmse need --reference) and report.json");
 
+  farm::ClientSecurity clientSecurity;  // for every command that talks to a coordinator
+
   // submit
   CLI::App* submit = app.add_subcommand(
       "submit",
@@ -653,6 +680,7 @@ int main(int argc, char** argv) {
   std::string address, submitScene;
   RenderOptions submitOptions;
   submit->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  addClientSecurity(submit, &clientSecurity);
   submit
       ->add_option("SCENE", submitScene,
                    "scene file: Mitsuba 0.6 XML, or pbrt-v3/v4 (.pbrt); its folder holds its "
@@ -666,6 +694,7 @@ int main(int argc, char** argv) {
   std::string job;
   bool json = false;
   status->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  addClientSecurity(status, &clientSecurity);
   status->add_option("JOB", job, "job id")->required();
   status->add_flag("--json", json, "print JSON instead of text");
 
@@ -675,6 +704,7 @@ int main(int argc, char** argv) {
   std::string fetchOutput;
   double timeout = 0;
   fetch->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  addClientSecurity(fetch, &clientSecurity);
   fetch->add_option("JOB", job, "job id")->required();
   fetch->add_option("-o,--output", fetchOutput, "output OpenEXR file")->required();
   fetch->add_option("--timeout", timeout, "give up after this many seconds (default: wait)")
@@ -699,6 +729,7 @@ int main(int argc, char** argv) {
   compare->add_option("--report", compareDir, "the report directory")->required();
   compare->add_option("--coordinator", compareCoordinator,
                       "HOST:PORT of a farm-coordinator to render on (default: here)");
+  addClientSecurity(compare, &clientSecurity);
   compare->add_option("--threads", compareThreads, "chain threads, rendering here")
       ->default_str(std::to_string(hardwareThreads));
   addRenderOptions(compare, &compareOptions);
@@ -711,6 +742,7 @@ int main(int argc, char** argv) {
       "(once done), chart and index.html");
   std::string reportJobDir;
   report->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  addClientSecurity(report, &clientSecurity);
   report->add_option("JOB", job, "job id")->required();
   report->add_option("DIR", reportJobDir, "the report directory")->required();
 
@@ -749,9 +781,11 @@ int main(int argc, char** argv) {
   // cancel, list
   CLI::App* cancel = app.add_subcommand("cancel", "cancel a job");
   cancel->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  addClientSecurity(cancel, &clientSecurity);
   cancel->add_option("JOB", job, "job id")->required();
   CLI::App* list = app.add_subcommand("list", "list the coordinator's jobs");
   list->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  addClientSecurity(list, &clientSecurity);
 
   try {
     app.parse(argc, argv);
@@ -774,16 +808,16 @@ int main(int argc, char** argv) {
     if (compareThreads < 1 || compareThreads > 4096)
       return fail("--threads must be between 1 and 4096", kUsageError);
     return runCompareCommand(compareScene, compareAlgorithms, compareOptions, compareCoordinator,
-                             compareThreads, compareDir);
+                             clientSecurity, compareThreads, compareDir);
   }
-  if (*report) return runReportCommand(address, job, reportJobDir);
+  if (*report) return runReportCommand(address, clientSecurity, job, reportJobDir);
   if (*planCommand)
     return runPlan(planScene, planAlgorithm, planMix, planNormals, planTime, planWidth, planHeight,
                    planPilot, json);
-  if (*submit) return runSubmit(address, submitScene, submitOptions);
-  if (*status) return runStatus(address, job, json);
-  if (*fetch) return runFetch(address, job, fetchOutput, timeout);
-  if (*cancel) return runCancel(address, job);
-  if (*list) return runList(address);
+  if (*submit) return runSubmit(address, clientSecurity, submitScene, submitOptions);
+  if (*status) return runStatus(address, clientSecurity, job, json);
+  if (*fetch) return runFetch(address, clientSecurity, job, fetchOutput, timeout);
+  if (*cancel) return runCancel(address, clientSecurity, job);
+  if (*list) return runList(address, clientSecurity);
   return fail("no command given (try --help)", kUsageError);
 }

@@ -15,6 +15,7 @@
 #include "proto/farm.grpc.pb.h"
 #include "proto/sha256.h"
 #include "proto/splat_codec.h"
+#include "proto/transport_security.h"
 #include "proto/wire_limits.h"
 
 #if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
@@ -47,6 +48,10 @@ grpc::Status toGrpc(const Status& s) {
       return {StatusCode::CANCELLED, s.message()};
     case farm::StatusCode::kInternal:
       return {StatusCode::INTERNAL, s.message()};
+    case farm::StatusCode::kUnauthenticated:
+      return {StatusCode::UNAUTHENTICATED, s.message()};
+    case farm::StatusCode::kPermissionDenied:
+      return {StatusCode::PERMISSION_DENIED, s.message()};
   }
   return {StatusCode::UNKNOWN, s.message()};
 }
@@ -164,12 +169,24 @@ grpc::Status streamFile(const std::string& path, const std::string& label,
 
 // ---------------------------------------------------------------------------------------------
 
+// The role's token check, first thing in every ClientApi and WorkerApi call (health and
+// reflection stay open: probes and tools need no token).
+grpc::Status allow(const CallGuard& guard, grpc::ServerContext* context, Role role) {
+  CallCheck check = guard.check(*context, role);
+  if (check.ok()) return grpc::Status::OK;
+  return {check.code == CallCheck::Code::kPermissionDenied ? grpc::StatusCode::PERMISSION_DENIED
+                                                           : grpc::StatusCode::UNAUTHENTICATED,
+          check.message};
+}
+
 class ClientService final : public v1::ClientApi::Service {
  public:
-  explicit ClientService(Coordinator* coordinator) : coordinator_(coordinator) {}
+  ClientService(Coordinator* coordinator, const CallGuard* guard)
+      : coordinator_(coordinator), guard_(guard) {}
 
-  grpc::Status MissingBlobs(grpc::ServerContext*, const v1::MissingBlobsRequest* request,
+  grpc::Status MissingBlobs(grpc::ServerContext* context, const v1::MissingBlobsRequest* request,
                             v1::MissingBlobsResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
     if (request->hashes_size() > 1000000) return invalid("more than 10^6 hashes in one request");
     for (const std::string& hash : request->hashes()) {
       if (!isSha256Hex(hash)) {
@@ -180,8 +197,10 @@ class ClientService final : public v1::ClientApi::Service {
     return grpc::Status::OK;
   }
 
-  grpc::Status SubmitJob(grpc::ServerContext*, grpc::ServerReader<v1::SubmitJobRequest>* reader,
+  grpc::Status SubmitJob(grpc::ServerContext* context,
+                         grpc::ServerReader<v1::SubmitJobRequest>* reader,
                          v1::SubmitJobResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
     v1::SubmitJobRequest message;
     if (!reader->Read(&message) || !message.has_header()) {
       return invalid("SubmitJob: the first message must be the job header");
@@ -302,8 +321,9 @@ class ClientService final : public v1::ClientApi::Service {
     return grpc::Status::OK;
   }
 
-  grpc::Status GetProgress(grpc::ServerContext*, const v1::GetProgressRequest* request,
+  grpc::Status GetProgress(grpc::ServerContext* context, const v1::GetProgressRequest* request,
                            v1::JobProgress* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
     grpc::Status check = checkId(request->job_id(), "job id");
     if (!check.ok()) return check;
     JobProgress progress;
@@ -315,6 +335,7 @@ class ClientService final : public v1::ClientApi::Service {
 
   grpc::Status FetchImage(grpc::ServerContext* context, const v1::FetchImageRequest* request,
                           grpc::ServerWriter<v1::ImageChunk>* writer) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
     grpc::Status check = checkId(request->job_id(), "job id");
     if (!check.ok()) return check;
     if (request->wait()) {
@@ -342,8 +363,9 @@ class ClientService final : public v1::ClientApi::Service {
         });
   }
 
-  grpc::Status CancelJob(grpc::ServerContext*, const v1::CancelJobRequest* request,
+  grpc::Status CancelJob(grpc::ServerContext* context, const v1::CancelJobRequest* request,
                          v1::CancelJobResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
     grpc::Status check = checkId(request->job_id(), "job id");
     if (!check.ok()) return check;
     JobPhase phase;
@@ -353,8 +375,9 @@ class ClientService final : public v1::ClientApi::Service {
     return grpc::Status::OK;
   }
 
-  grpc::Status ListJobs(grpc::ServerContext*, const v1::ListJobsRequest*,
+  grpc::Status ListJobs(grpc::ServerContext* context, const v1::ListJobsRequest*,
                         v1::ListJobsResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
     for (const JobProgress& p : coordinator_->list()) {
       v1::JobSummary* job = response->add_jobs();
       job->set_job_id(p.jobId);
@@ -370,16 +393,20 @@ class ClientService final : public v1::ClientApi::Service {
 
  private:
   Coordinator* coordinator_;
+  const CallGuard* guard_;
 };
 
 // ---------------------------------------------------------------------------------------------
 
 class WorkerService final : public v1::WorkerApi::Service {
  public:
-  explicit WorkerService(Coordinator* coordinator) : coordinator_(coordinator) {}
+  WorkerService(Coordinator* coordinator, const CallGuard* guard)
+      : coordinator_(coordinator), guard_(guard) {}
 
-  grpc::Status RegisterWorker(grpc::ServerContext*, const v1::RegisterWorkerRequest* request,
+  grpc::Status RegisterWorker(grpc::ServerContext* context,
+                              const v1::RegisterWorkerRequest* request,
                               v1::RegisterWorkerResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kWork); !denied.ok()) return denied;
     if (request->protocol_version() != kProtocolVersion) {
       return {grpc::StatusCode::FAILED_PRECONDITION,
               "worker speaks farm protocol " + std::to_string(request->protocol_version()) +
@@ -405,6 +432,7 @@ class WorkerService final : public v1::WorkerApi::Service {
 
   grpc::Status LeaseChains(grpc::ServerContext* context, const v1::LeaseChainsRequest* request,
                            v1::LeaseChainsResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kWork); !denied.ok()) return denied;
     grpc::Status check = checkId(request->worker_id(), "worker id");
     if (!check.ok()) return check;
     const auto maxWait =
@@ -438,8 +466,9 @@ class WorkerService final : public v1::WorkerApi::Service {
     return grpc::Status::OK;
   }
 
-  grpc::Status RenewLeases(grpc::ServerContext*, const v1::RenewLeasesRequest* request,
+  grpc::Status RenewLeases(grpc::ServerContext* context, const v1::RenewLeasesRequest* request,
                            v1::RenewLeasesResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kWork); !denied.ok()) return denied;
     grpc::Status check = checkId(request->worker_id(), "worker id");
     if (!check.ok()) return check;
     if (request->leases_size() > 4096) return invalid("more than 4096 leases in one renewal");
@@ -458,8 +487,10 @@ class WorkerService final : public v1::WorkerApi::Service {
     return grpc::Status::OK;
   }
 
-  grpc::Status FetchSceneBundle(grpc::ServerContext*, const v1::FetchSceneBundleRequest* request,
+  grpc::Status FetchSceneBundle(grpc::ServerContext* context,
+                                const v1::FetchSceneBundleRequest* request,
                                 grpc::ServerWriter<v1::SceneBundleChunk>* writer) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kWork); !denied.ok()) return denied;
     if (!isSha256Hex(request->bundle_hash())) {
       return invalid("bundle hash '" + request->bundle_hash().substr(0, 80) +
                      "' is not a SHA-256 hash");
@@ -490,8 +521,10 @@ class WorkerService final : public v1::WorkerApi::Service {
     return grpc::Status::OK;
   }
 
-  grpc::Status UploadFlush(grpc::ServerContext*, grpc::ServerReader<v1::UploadFlushRequest>* reader,
+  grpc::Status UploadFlush(grpc::ServerContext* context,
+                           grpc::ServerReader<v1::UploadFlushRequest>* reader,
                            v1::UploadFlushResponse* response) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kWork); !denied.ok()) return denied;
     v1::UploadFlushRequest message;
     if (!reader->Read(&message) || !message.has_header()) {
       return invalid("UploadFlush: the first message must be the flush header");
@@ -667,18 +700,22 @@ class WorkerService final : public v1::WorkerApi::Service {
   }
 
   Coordinator* coordinator_;
+  const CallGuard* guard_;
 };
 
 class GrpcCoordinatorServer final : public CoordinatorServer {
  public:
-  explicit GrpcCoordinatorServer(Coordinator* coordinator)
-      : coordinator_(coordinator), clientService_(coordinator), workerService_(coordinator) {}
+  GrpcCoordinatorServer(Coordinator* coordinator, std::unique_ptr<CallGuard> guard)
+      : coordinator_(coordinator),
+        guard_(std::move(guard)),
+        clientService_(coordinator, guard_.get()),
+        workerService_(coordinator, guard_.get()) {}
 
   bool start(const std::string& address, std::string* error) {
     grpc::EnableDefaultHealthCheckService(true);
     grpc::reflection::InitProtoReflectionServerBuilderPlugin();
     grpc::ServerBuilder builder;
-    builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &port_);
+    builder.AddListeningPort(address, guard_->credentials(), &port_);
     builder.SetMaxReceiveMessageSize(kMaxMessageBytes);
     builder.SetMaxSendMessageSize(kMaxMessageBytes);
     builder.RegisterService(&clientService_);
@@ -694,6 +731,7 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
   }
 
   int port() const override { return port_; }
+  std::string security() const override { return guard_->describe(); }
 
   void shutdown() override {
     if (!server_) return;
@@ -707,6 +745,7 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
 
  private:
   Coordinator* coordinator_;
+  std::unique_ptr<CallGuard> guard_;  // before the services, which hold it
   ClientService clientService_;
   WorkerService workerService_;
   std::unique_ptr<grpc::Server> server_;
@@ -717,10 +756,19 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
 
 std::unique_ptr<CoordinatorServer> CoordinatorServer::start(const std::string& address,
                                                             Coordinator* coordinator,
+                                                            const ServerSecurity& security,
                                                             std::string* error) {
-  auto server = std::make_unique<GrpcCoordinatorServer>(coordinator);
+  std::unique_ptr<CallGuard> guard = CallGuard::load(address, security, error);
+  if (!guard) return nullptr;
+  auto server = std::make_unique<GrpcCoordinatorServer>(coordinator, std::move(guard));
   if (!server->start(address, error)) return nullptr;
   return server;
+}
+
+std::unique_ptr<CoordinatorServer> CoordinatorServer::start(const std::string& address,
+                                                            Coordinator* coordinator,
+                                                            std::string* error) {
+  return start(address, coordinator, ServerSecurity{}, error);
 }
 
 }  // namespace farm

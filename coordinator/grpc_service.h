@@ -5,17 +5,28 @@
 #include <memory>
 #include <string>
 
+#include "proto/transport_security.h"
+
 namespace farm {
 
 class Coordinator;
 
 class CoordinatorServer {
  public:
-  // Listens on `address` (HOST:PORT; port 0 picks a free one). Null with *error on failure.
+  // Listens on `address` (HOST:PORT; port 0 picks a free one) with the TLS and tokens that
+  // `security` names (proto/transport_security.h). Null with *error on failure: a file that
+  // cannot be read, a listener that `security` would leave exposed, an address in use.
+  static std::unique_ptr<CoordinatorServer> start(const std::string& address,
+                                                  Coordinator* coordinator,
+                                                  const ServerSecurity& security,
+                                                  std::string* error);
+  // Plaintext and no tokens (loopback only): for tests.
   static std::unique_ptr<CoordinatorServer> start(const std::string& address,
                                                   Coordinator* coordinator, std::string* error);
   virtual ~CoordinatorServer() = default;
   virtual int port() const = 0;
+  // What protects the listener, for the log: "TLS; tokens for submit and work".
+  virtual std::string security() const = 0;
   // Stops accepting calls and ends those in flight (after a short grace period).
   virtual void shutdown() = 0;
 };

@@ -57,6 +57,29 @@ int main(int argc, char** argv) {
                  "goes to another worker")
       ->check(CLI::Range(0.5, 3600.0))
       ->default_str("30");
+  farm::ServerSecurity security;
+  app.add_option("--tls-cert", security.certFile,
+                 "PEM certificate chain to serve TLS with (with --tls-key; clients verify it "
+                 "against their --tls-ca, and its names must match the HOST they dial)")
+      ->envname("FARM_COORDINATOR_TLS_CERT");
+  app.add_option("--tls-key", security.keyFile, "PEM private key of --tls-cert (unencrypted)")
+      ->envname("FARM_COORDINATOR_TLS_KEY");
+  app.add_option("--tls-client-ca", security.clientCaFile,
+                 "PEM CA certificates: with TLS, every caller (worker or client) must present a "
+                 "certificate signed by one of them (mutual TLS)")
+      ->envname("FARM_COORDINATOR_TLS_CLIENT_CA");
+  app.add_option("--submit-token-file", security.submitTokenFile,
+                 "file whose first line is the token the client API (submit, status, fetch, "
+                 "cancel, list, report) asks for as `authorization: Bearer TOKEN`")
+      ->envname("FARM_SUBMIT_TOKEN_FILE");
+  app.add_option("--work-token-file", security.workTokenFile,
+                 "file whose first line is the token the worker API asks for; it must differ "
+                 "from the submit token, and neither opens the other's API")
+      ->envname("FARM_WORK_TOKEN_FILE");
+  app.add_flag("--insecure", security.insecure,
+               "listen on an address other than loopback without TLS or without both tokens "
+               "(refused otherwise: anyone who can reach the port could read images and tokens, "
+               "submit jobs or pose as a worker)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -113,15 +136,26 @@ int main(int argc, char** argv) {
   }
   farm::Coordinator& coordinator = *coordinatorPtr;
   std::string error;
-  auto server = farm::CoordinatorServer::start(listen, &coordinator, &error);
+  auto server = farm::CoordinatorServer::start(listen, &coordinator, security, &error);
   if (!server) {
     std::cerr << "farm-coordinator: " << error << "\n";
     if (temporaryDataDir) std::filesystem::remove_all(dataDir, ec);
     return 1;
   }
   std::string host = listen.substr(0, listen.rfind(':'));
+  spdlog::info("serving {}", server->security());
+  if (!farm::isLoopbackAddress(listen)) {
+    if (security.certFile.empty()) {
+      spdlog::warn(
+          "--insecure: listening on {}:{} in plaintext: jobs, images and any token "
+          "cross the network readable",
+          host, server->port());
+    } else if (security.submitTokenFile.empty() || security.workTokenFile.empty()) {
+      spdlog::warn("--insecure: listening on {}:{} without both tokens", host, server->port());
+    }
+  }
   std::cout << "farm-coordinator listening on " << host << ":" << server->port() << " (data in "
-            << dataDir << ")" << std::endl;
+            << dataDir << "; " << server->security() << ")" << std::endl;
 
   int signal = 0;
   sigwait(&signals, &signal);

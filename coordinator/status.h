@@ -17,6 +17,8 @@ enum class StatusCode {
   kDeadlineExceeded,
   kCancelled,
   kInternal,
+  kUnauthenticated,   // no token, or not this coordinator's
+  kPermissionDenied,  // a token of the other role
 };
 
 class Status {

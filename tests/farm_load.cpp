@@ -34,7 +34,9 @@
 #include "proto/farm.grpc.pb.h"
 #include "proto/sha256.h"
 #include "proto/splat_codec.h"
+#include "proto/transport_security.h"
 #include "proto/wire_limits.h"
+#include "tests/test_pki.h"
 #include "tests/test_support.h"
 
 namespace farm {
@@ -58,6 +60,7 @@ struct Options {
   bool batch = false;      // each upload: a simulated worker's chains summed (FlushHeader.entries)
   std::string json;
   bool check = false;
+  bool tls = false;  // the coordinator serves TLS with tokens, and every upload goes over it
 };
 
 // A chain held by a simulated worker, and the next flush index it uploads.
@@ -111,13 +114,22 @@ double peakResidentMiB(pid_t pid) {
   return 0;
 }
 
+// With --tls: the CA and work token every simulated worker presents (plaintext otherwise).
+ClientSecurity gWorkSecurity;
+
 std::shared_ptr<grpc::Channel> channel(const std::string& address) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(kMaxMessageBytes);
   args.SetMaxSendMessageSize(kMaxMessageBytes);
   // A connection of its own per channel, as separate worker processes would have.
   args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+  std::string error;
+  auto ch = makeClientChannel(address, gWorkSecurity, args, &error);
+  if (!ch) {
+    std::cerr << "farm_load: " << error << "\n";
+    std::exit(1);
+  }
+  return ch;
 }
 
 // The header, then the splat bytes in chunks, as a worker streams them.
@@ -219,6 +231,19 @@ int run(const Options& o) {
     argv.push_back("--data");
     argv.push_back(scratch / "data");
   }
+  ClientSecurity submitSecurity;
+  if (o.tls) {
+    const testing::TestPki pki = testing::makeTestPki(scratch.path());
+    if (!pki.problem.empty()) {
+      std::cerr << "farm_load: " << pki.problem << "\n";
+      return 1;
+    }
+    argv.insert(argv.end(),
+                {"--tls-cert", pki.serverCert, "--tls-key", pki.serverKey, "--submit-token-file",
+                 pki.submitToken, "--work-token-file", pki.workToken});
+    gWorkSecurity = {pki.caCert, "", "", pki.workToken};
+    submitSecurity = {pki.caCert, "", "", pki.submitToken};
+  }
   testing::ChildProcess coordinator(argv, scratch / "coordinator.out", scratch / "coordinator.err");
   const std::string text = testing::waitForText(
       scratch / "coordinator.out", "listening on 127.0.0.1:", std::chrono::seconds(20));
@@ -245,7 +270,7 @@ int run(const Options& o) {
     std::cerr << "farm_load: " << error << "\n";
     return 1;
   }
-  FarmClient client(address);
+  FarmClient client(address, submitSecurity);
   std::string jobId;
   Status st = client.submit(submission, &jobId);
   if (!st.isOk()) {
@@ -488,6 +513,7 @@ int run(const Options& o) {
   r["chains"] = chains.size();
   r["connections"] = connections;
   r["durable"] = o.durable;
+  r["tls"] = o.tls;
   r["seconds"] = wall;
   r["flushes_accepted"] = total.accepted;
   r["flushes_refused"] = total.refused;
@@ -567,6 +593,9 @@ int main(int argc, char** argv) {
                  "DUPLICATE (0: never)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_flag("--tls", o.tls,
+               "the coordinator serves TLS with a token per role (certificates made by the "
+               "openssl command in the scratch directory), and every simulated worker uses them");
   app.add_flag("--durable", o.durable, "start the coordinator with --data (SQLite, synchronous)");
   app.add_flag("--batch", o.batch,
                "each upload carries all of a simulated worker's chains, their flushes summed "

@@ -2,7 +2,8 @@
 // the coordinator, one per worker host; a worker reaches the coordinator only over its own
 // link). Workers join and leave mid-job (two at once on one host, sharing its cache), one is
 // killed, one comes back; the image equals `farm render`'s of the same job and seed, and each
-// host fetches the scene bundle once.
+// host fetches the scene bundle once. The coordinator listens beyond loopback, so the farm runs
+// secured as a user would run it: TLS with client certificates and a token per role.
 // Needs root and `ip netns` (iproute2); skipped with the reason where they are missing.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "common/film/image.h"
+#include "tests/test_pki.h"
 #include "tests/test_support.h"
 
 namespace farm::testing {
@@ -113,9 +115,20 @@ TEST(MultiHost, WorkersJoinLeaveAndDieAcrossHostsAndTheImageIsUnchanged) {
   HostNetwork net(3, scratch.path());
   if (!net.problem().empty()) GTEST_SKIP() << "no network namespaces here: " << net.problem();
 
+  // The certificate names the address each host dials.
+  const TestPki pki =
+      makeTestPki(scratch.path(),
+                  {"127.0.0.1", HostNetwork::coordinatorAddressFrom(1),
+                   HostNetwork::coordinatorAddressFrom(2), HostNetwork::coordinatorAddressFrom(3)});
+  ASSERT_EQ(pki.problem, "");
+  const std::vector<std::string> clientTls = {"--tls-ca",     pki.caCert,  "--tls-cert",
+                                              pki.clientCert, "--tls-key", pki.clientKey};
   ChildProcess coordinator(
-      HostNetwork::in(net.coordinator(), {FARM_COORDINATOR_BIN, "--listen", "0.0.0.0:0", "--data",
-                                          scratch / "coordinator-data", "--lease-seconds", "1.5"}),
+      HostNetwork::in(net.coordinator(),
+                      {FARM_COORDINATOR_BIN, "--listen", "0.0.0.0:0", "--data",
+                       scratch / "coordinator-data", "--lease-seconds", "1.5", "--tls-cert",
+                       pki.serverCert, "--tls-key", pki.serverKey, "--tls-client-ca", pki.caCert,
+                       "--submit-token-file", pki.submitToken, "--work-token-file", pki.workToken}),
       scratch / "coordinator.out", scratch / "coordinator.err");
   const std::string listening =
       waitForText(scratch / "coordinator.out", "listening on 0.0.0.0:", seconds(15));
@@ -124,6 +137,8 @@ TEST(MultiHost, WorkersJoinLeaveAndDieAcrossHostsAndTheImageIsUnchanged) {
       std::atoi(listening.c_str() + listening.find("0.0.0.0:") + std::string("0.0.0.0:").size()));
   auto client = [&](std::vector<std::string> args) {
     args.insert(args.begin() + 1, {"--coordinator", "127.0.0.1:" + port});
+    args.insert(args.end(), clientTls.begin(), clientTls.end());
+    args.insert(args.end(), {"--token-file", pki.submitToken});
     args.insert(args.begin(), FARM_CLI_BIN);
     return runCommand(HostNetwork::in(net.coordinator(), args), seconds(250), scratch.path());
   };
@@ -135,7 +150,9 @@ TEST(MultiHost, WorkersJoinLeaveAndDieAcrossHostsAndTheImageIsUnchanged) {
         HostNetwork::in(
             net.host(i),
             {FARM_WORKER_BIN, "--coordinator", HostNetwork::coordinatorAddressFrom(i) + ":" + port,
-             "--threads", "1", "--cache", scratch / ("cache-host" + std::to_string(i))}),
+             "--threads", "1", "--cache", scratch / ("cache-host" + std::to_string(i)), "--tls-ca",
+             pki.caCert, "--tls-cert", pki.clientCert, "--tls-key", pki.clientKey, "--token-file",
+             pki.workToken}),
         log, log);
     EXPECT_FALSE(waitForText(log, "registered", seconds(15)).empty()) << "host " << i << ":\n"
                                                                       << readFile(log);

@@ -135,13 +135,19 @@ std::string lastLine(const std::string& text) {
 }
 
 CoordinatorProcess::CoordinatorProcess(const std::string& scratch, double leaseSeconds, int port,
-                                       const std::string& tag)
+                                       const std::string& tag,
+                                       const std::vector<std::string>& extraArgs)
     : scratch_(scratch), tag_(tag) {
-  process_ = std::make_unique<ChildProcess>(
-      std::vector<std::string>{
-          FARM_COORDINATOR_BIN, "--listen", "127.0.0.1:" + std::to_string(port), "--data",
-          scratch + "/coordinator-data", "--lease-seconds", std::to_string(leaseSeconds)},
-      scratch + "/" + tag + ".out", scratch + "/" + tag + ".err");
+  std::vector<std::string> argv{FARM_COORDINATOR_BIN,
+                                "--listen",
+                                "127.0.0.1:" + std::to_string(port),
+                                "--data",
+                                scratch + "/coordinator-data",
+                                "--lease-seconds",
+                                std::to_string(leaseSeconds)};
+  argv.insert(argv.end(), extraArgs.begin(), extraArgs.end());
+  process_ = std::make_unique<ChildProcess>(argv, scratch + "/" + tag + ".out",
+                                            scratch + "/" + tag + ".err");
   std::string text = waitForText(scratch + "/" + tag + ".out",
                                  "listening on 127.0.0.1:", std::chrono::seconds(15));
   size_t at = text.find("127.0.0.1:");

@@ -65,8 +65,10 @@ std::string lastLine(const std::string& text);
 // and its output in scratch/<tag>.out and .err.
 class CoordinatorProcess {
  public:
+  // `extraArgs` go on its command line (TLS and token flags, for example).
   CoordinatorProcess(const std::string& scratch, double leaseSeconds = 5, int port = 0,
-                     const std::string& tag = "coordinator");
+                     const std::string& tag = "coordinator",
+                     const std::vector<std::string>& extraArgs = {});
   bool ok() const { return port_ > 0; }
   std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
   ChildProcess& process() { return *process_; }

@@ -53,6 +53,19 @@ int main(int argc, char** argv) {
                  "uploads each flush on its own")
       ->check(CLI::Range(0.0, 600.0))
       ->default_str("1");
+  farm::ClientSecurity security;
+  app.add_option("--tls-ca", security.caFile,
+                 "PEM CA certificates to verify the coordinator's TLS certificate against "
+                 "(default: plaintext)")
+      ->envname("FARM_WORKER_TLS_CA");
+  app.add_option("--tls-cert", security.certFile,
+                 "PEM client certificate, for a coordinator that asks for one (with --tls-key)")
+      ->envname("FARM_WORKER_TLS_CERT");
+  app.add_option("--tls-key", security.keyFile, "PEM private key of --tls-cert")
+      ->envname("FARM_WORKER_TLS_KEY");
+  app.add_option("--token-file", security.tokenFile,
+                 "file whose first line is the coordinator's work token")
+      ->envname("FARM_WORKER_TOKEN_FILE");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -75,11 +88,19 @@ int main(int argc, char** argv) {
 
   farm::RemoteSourceOptions options;
   options.coordinator = coordinator;
+  options.security = security;
   options.threads = threads;
   options.cacheDir = cacheDir;
   options.log = log;
   options.batchWindowSeconds = batchWindow;
-  farm::RemoteChainSource source(options);
+  std::unique_ptr<farm::RemoteChainSource> sourcePtr;
+  try {
+    sourcePtr = std::make_unique<farm::RemoteChainSource>(options);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "farm-worker: " << e.what() << "\n";
+    return 2;
+  }
+  farm::RemoteChainSource& source = *sourcePtr;
   farm::WorkerPoolOptions poolOptions;
   poolOptions.threads = threads;
   poolOptions.log = log;

@@ -16,6 +16,7 @@
 #include "proto/farm.grpc.pb.h"
 #include "proto/sha256.h"
 #include "proto/splat_codec.h"
+#include "proto/transport_security.h"
 #include "proto/wire_limits.h"
 #include "worker/flush_batcher.h"
 #include "worker/scene_cache.h"
@@ -249,8 +250,10 @@ RemoteChainSource::RemoteChainSource(RemoteSourceOptions options) : impl_(new Im
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(kMaxMessageBytes);
   args.SetMaxSendMessageSize(kMaxMessageBytes);
-  impl_->channel = grpc::CreateCustomChannel(impl_->options.coordinator,
-                                             grpc::InsecureChannelCredentials(), args);
+  std::string error;
+  impl_->channel =
+      makeClientChannel(impl_->options.coordinator, impl_->options.security, args, &error);
+  if (!impl_->channel) throw std::invalid_argument(error);
   impl_->stub = v1::WorkerApi::NewStub(impl_->channel);
   Impl* impl = impl_.get();
   if (impl_->options.batchWindowSeconds > 0) {

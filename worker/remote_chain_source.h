@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "proto/transport_security.h"
 #include "worker/chain_source.h"
 #include "worker/flush_batcher.h"
 
@@ -13,6 +14,7 @@ namespace farm {
 
 struct RemoteSourceOptions {
   std::string coordinator;  // HOST:PORT
+  ClientSecurity security;  // TLS roots, client certificate and work token to present
   int threads = 1;          // announced at registration
   std::string cacheDir;     // scene bundles, by content hash
   std::string version = "farm-worker";
@@ -26,6 +28,7 @@ struct RemoteSourceOptions {
 
 class RemoteChainSource final : public ChainSource {
  public:
+  // Throws std::invalid_argument, naming the file, when a TLS or token file cannot be used.
   explicit RemoteChainSource(RemoteSourceOptions options);
   ~RemoteChainSource() override;
 
