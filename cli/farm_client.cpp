@@ -109,6 +109,8 @@ struct FarmClient::Impl {
         return {StatusCode::kFailedPrecondition, s.error_message()};
       case grpc::StatusCode::DATA_LOSS:
         return {StatusCode::kDataLoss, s.error_message()};
+      case grpc::StatusCode::RESOURCE_EXHAUSTED:
+        return {StatusCode::kResourceExhausted, s.error_message()};
       case grpc::StatusCode::UNAUTHENTICATED:
         return {StatusCode::kUnauthenticated,
                 "the coordinator at " + address + " refused the call: " + s.error_message()};

@@ -33,9 +33,28 @@ bool collectSceneBundle(const std::string& sceneFile, LocalBundle* bundle, std::
     return false;
   }
   std::sort(files.begin(), files.end());
+  // Symbolic links are followed only to what lies inside the tree, judged by where they lead
+  // after every link on the way is resolved.
+  const fs::path canonicalRoot = fs::canonical(root, ec);
+  if (ec) {
+    *error = "cannot resolve the scene directory '" + root.string() + "': " + ec.message();
+    return false;
+  }
   for (const fs::path& file : files) {
-    const std::string relative = fs::relative(file, root, ec).generic_string();
-    if (ec) continue;
+    // Named by where it lies in the tree, not where a link leads (fs::relative would resolve
+    // links and name a link after its target, twice in one manifest).
+    const std::string relative = file.lexically_relative(root).generic_string();
+    if (fs::is_symlink(file, ec)) {
+      const fs::path target = fs::canonical(file, ec);
+      const std::string inside = ec ? "" : fs::relative(target, canonicalRoot, ec).generic_string();
+      if (ec || inside.empty() || inside == ".." || inside.rfind("../", 0) == 0) {
+        if (warn) {
+          warn("leaving out '" + relative + "': a symbolic link to '" + target.string() +
+               "', outside the scene's folder");
+        }
+        continue;
+      }
+    }
     const uint64_t size = fs::file_size(file, ec);
     if (ec) continue;
     if (size > kMaxBundleFileBytes) {

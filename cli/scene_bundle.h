@@ -1,6 +1,8 @@
 #pragma once
-// What `farm submit` uploads: every file in the scene file's directory tree (files over
-// kMaxBundleFileBytes left out, with a warning), each named by its SHA-256.
+// What `farm submit` uploads: every file in the scene file's directory tree, each named by its
+// SHA-256. Left out, with a warning: files over kMaxBundleFileBytes, and symbolic links that
+// lead out of the tree (a bundle holds only what lies inside its folder: a link to
+// ~/.ssh/id_rsa beside a scene must not travel to the farm).
 #include <functional>
 #include <string>
 #include <vector>

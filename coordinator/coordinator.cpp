@@ -144,6 +144,22 @@ Status Coordinator::submit(JobSpec spec, std::string* jobId) {
   if (!spec.referencePath.empty() && !fs::is_regular_file(spec.referencePath, ec)) {
     return Status::invalidArgument("reference image '" + spec.referencePath + "' does not exist");
   }
+  // Counted from a snapshot, outside the lock (a job's phase takes the job's own lock); two
+  // submits at once may pass the limit by one each.
+  std::vector<std::shared_ptr<Job>> held;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    held = jobs_;
+  }
+  const auto active = std::count_if(held.begin(), held.end(), [](const std::shared_ptr<Job>& j) {
+    return !isTerminal(j->phase());
+  });
+  if (active >= options_.maxActiveJobs) {
+    return {StatusCode::kResourceExhausted,
+            std::to_string(active) + " jobs are already queued or rendering here, the most this " +
+                "coordinator holds (--max-jobs " + std::to_string(options_.maxActiveJobs) +
+                "): wait for one to finish or cancel one"};
+  }
   std::shared_ptr<Job> job;
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -28,6 +28,9 @@ struct CoordinatorOptions {
   int maxChainFailures = 3;      // a worker failing one chain this often gets none of its job's
   double leaseSeconds = 30;      // a lease lives this long without a flush or renewal
   double tickSeconds = 0.1;      // how often leases and time budgets are checked
+  // Jobs not yet done, failed or cancelled that the coordinator holds at once; a submit beyond
+  // is kResourceExhausted (each holds films and a bootstrap in memory).
+  int maxActiveJobs = 100;
   std::function<void(const std::string&)> log;  // one line per event worth an operator's eye
 };
 

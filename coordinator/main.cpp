@@ -52,6 +52,12 @@ int main(int argc, char** argv) {
                  "this many times gets no more chains of that job; the job's status names it")
       ->check(CLI::Range(1, 1000000))
       ->default_str("3");
+  int maxJobs = 100;
+  app.add_option("--max-jobs", maxJobs,
+                 "jobs queued or rendering at once; a submit beyond is refused "
+                 "(RESOURCE_EXHAUSTED) until one finishes or is cancelled")
+      ->check(CLI::Range(1, 100000))
+      ->default_str("100");
   app.add_option("--lease-seconds", leaseSeconds,
                  "how long a chain's lease lives without a flush or renewal before the chain "
                  "goes to another worker")
@@ -120,6 +126,7 @@ int main(int argc, char** argv) {
   options.dataDir = dataDir;
   options.leaseSeconds = leaseSeconds;
   options.maxChainFailures = maxChainFailures;
+  options.maxActiveJobs = maxJobs;
   options.log = [](const std::string& line) { spdlog::info("{}", line); };
   options.durable = !temporaryDataDir;
   if (!options.durable) {
