@@ -2,6 +2,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -55,6 +56,7 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->rejected.nan = m.rejected_nan();
   p->rejected.infinite = m.rejected_infinite();
   p->rejected.negative = m.rejected_negative();
+  p->tallies.clear();  // *p may hold an earlier answer (status asks twice)
   for (const v1::MutationTally& t : m.tallies())
     p->tallies.push_back({t.name(), t.proposed(), t.accepted()});
   p->warnings.assign(m.warnings().begin(), m.warnings().end());
@@ -71,6 +73,7 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->chainsTotal = m.chains_total();
   p->chainsFinished = m.chains_finished();
   p->chainsLeased = m.chains_leased();
+  p->activeWorkers = m.active_workers();
   p->hasReference = m.has_reference();
   p->errorSeries.clear();
   for (const v1::ErrorSample& e : m.error_series()) {
@@ -243,6 +246,31 @@ Status FarmClient::progress(const std::string& jobId, uint32_t errorSeriesFrom, 
   grpc::Status s = impl_->stub->GetProgress(&context, request, &response);
   if (!s.ok()) return impl_->fail(s);
   fromProto(response, out);
+  return Status::ok();
+}
+
+Status FarmClient::watch(const std::string& jobId, double intervalSeconds,
+                         const std::function<bool(const JobProgress&)>& onProgress) {
+  if (!impl_->stub) return {StatusCode::kInvalidArgument, impl_->setupError};
+  v1::WatchJobRequest request;
+  request.set_job_id(jobId);
+  request.set_interval_ms(uint32_t(std::clamp(intervalSeconds, 0.1, 10.0) * 1000));
+  grpc::ClientContext context;  // no deadline: a watch lasts as long as the job
+  auto reader = impl_->stub->WatchJob(&context, request);
+  v1::JobProgress message;
+  bool more = true;
+  while (more && reader->Read(&message)) {
+    JobProgress progress;
+    fromProto(message, &progress);
+    more = onProgress(progress);
+  }
+  if (!more) {
+    context.TryCancel();
+    reader->Finish();
+    return Status::ok();
+  }
+  grpc::Status s = reader->Finish();
+  if (!s.ok()) return impl_->fail(s);
   return Status::ok();
 }
 

@@ -39,6 +39,11 @@ class FarmClient {
   // Uploads what the coordinator is missing and starts the job.
   Status submit(const Submission& submission, std::string* jobId, SubmitStats* stats = nullptr);
   Status progress(const std::string& jobId, uint32_t errorSeriesFrom, JobProgress* out);
+  // Streams the job's progress every `intervalSeconds` (0.1 to 10) until it ends; each
+  // message's error series holds only the samples not passed before. `onProgress` returning
+  // false stops the watch (the job goes on). Ok once the job has ended (whatever its phase).
+  Status watch(const std::string& jobId, double intervalSeconds,
+               const std::function<bool(const JobProgress&)>& onProgress);
   // Downloads the final EXR to `path` (written beside and renamed, so a failure leaves no
   // partial file). wait=false: FailedPrecondition unless the job is done.
   Status fetchImage(const std::string& jobId, bool wait, const std::string& path);

@@ -484,6 +484,32 @@ int runFetch(const std::string& address, const farm::ClientSecurity& security,
   return 0;
 }
 
+// Follows a job as the coordinator streams it (WatchJob), until it ends or Ctrl-C.
+int runWatch(const std::string& address, const farm::ClientSecurity& security,
+             const std::string& job, double interval) {
+  farm::FarmClient client(address, security);
+  if (int rc = connectTo(client)) return rc;
+  const std::atomic<bool>* interrupted = catchInterrupts();
+  ProgressDisplay display;
+  farm::JobProgress last;
+  bool any = false;
+  Status s = client.watch(job, interval, [&](const farm::JobProgress& p) {
+    display.show(p);
+    last = p;
+    any = true;
+    return !*interrupted;
+  });
+  display.finish();
+  if (!s.isOk()) return fail(s.message());
+  if (*interrupted) return fail("interrupted (the job goes on)");
+  if (!any) return fail("the coordinator sent no progress for job " + job);
+  if (last.phase == farm::JobPhase::kFailed) return fail("job " + job + " failed: " + last.error);
+  if (last.phase == farm::JobPhase::kCancelled) return fail("job " + job + " was cancelled");
+  std::cout << "job " << job << ": " << farm::jobPhaseName(last.phase) << " after "
+            << farm::formatDuration(last.elapsedSeconds) << " (fetch it with `farm fetch`)\n";
+  return 0;
+}
+
 int runCancel(const std::string& address, const farm::ClientSecurity& security,
               const std::string& job) {
   farm::FarmClient client(address, security);
@@ -641,7 +667,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "farm: a Metropolis light transport render farm. Render a scene in this process "
       "(render), compare algorithms on it (compare), or submit it to a farm-coordinator and "
-      "follow the job (submit, status, fetch, report, cancel, list)."};
+      "follow the job (submit, status, watch, fetch, report, cancel, list)."};
   app.require_subcommand(1);
   const int hardwareThreads = int(std::max(1u, std::thread::hardware_concurrency()));
 
@@ -709,6 +735,20 @@ int main(int argc, char** argv) {
   fetch->add_option("-o,--output", fetchOutput, "output OpenEXR file")->required();
   fetch->add_option("--timeout", timeout, "give up after this many seconds (default: wait)")
       ->check(CLI::NonNegativeNumber);
+
+  // watch
+  CLI::App* watch = app.add_subcommand(
+      "watch",
+      "follow a job live as the coordinator streams it: a progress bar with the fraction done, "
+      "samples/s, elapsed time, ETA, error (estimate) and the workers running it, until the job "
+      "ends; exits 0 when it is done");
+  double watchInterval = 0.5;
+  watch->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
+  addClientSecurity(watch, &clientSecurity);
+  watch->add_option("JOB", job, "job id")->required();
+  watch->add_option("--interval", watchInterval, "seconds between updates (0.1 to 10)")
+      ->check(CLI::Range(0.1, 10.0))
+      ->default_str("0.5");
 
   // compare
   CLI::App* compare = app.add_subcommand(
@@ -817,6 +857,7 @@ int main(int argc, char** argv) {
   if (*submit) return runSubmit(address, clientSecurity, submitScene, submitOptions);
   if (*status) return runStatus(address, clientSecurity, job, json);
   if (*fetch) return runFetch(address, clientSecurity, job, fetchOutput, timeout);
+  if (*watch) return runWatch(address, clientSecurity, job, watchInterval);
   if (*cancel) return runCancel(address, clientSecurity, job);
   if (*list) return runList(address, clientSecurity);
   return fail("no command given (try --help)", kUsageError);

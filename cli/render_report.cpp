@@ -127,6 +127,8 @@ std::string progressLine(const JobProgress& p, int barWidth) {
   if (const ErrorSample* e = latestEstimated(p)) {
     line += "  est. relMSE " + format("%.3g", e->estimatedRelMse);
   }
+  if (p.phase == JobPhase::kRendering)
+    line += "  " + std::to_string(p.activeWorkers) + " worker(s)";
   return line;
 }
 
@@ -163,7 +165,7 @@ std::string statusText(const JobProgress& p) {
   out << "  elapsed " << formatDuration(p.elapsedSeconds) << ", ETA "
       << formatDuration(p.etaSeconds) << "\n";
   out << "  chains: " << p.chainsFinished << " of " << p.chainsTotal << " finished, "
-      << p.chainsLeased << " running\n";
+      << p.chainsLeased << " running on " << p.activeWorkers << " worker(s)\n";
   if (needsBootstrap(p.settings.algorithm) && p.normalization > 0) {
     out << "  Z = " << format("%.6g", p.normalization) << " +- "
         << format("%.3g", p.normalizationStdError) << " (bootstrap "
@@ -208,6 +210,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["chains_total"] = p.chainsTotal;
   j["chains_finished"] = p.chainsFinished;
   j["chains_leased"] = p.chainsLeased;
+  j["active_workers"] = p.activeWorkers;
   j["rejected_splats"] = {{"total", p.rejected.total()},
                           {"nan", p.rejected.nan},
                           {"infinite", p.rejected.infinite},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 
 namespace farm {
@@ -179,6 +180,14 @@ uint32_t ChainScheduler::leasedCount() const {
   uint32_t n = 0;
   for (const Chain& chain : chains_) n += chain.state == State::kLeased;
   return n;
+}
+
+uint32_t ChainScheduler::holderCount() const {
+  std::set<std::string> holders;
+  for (const Chain& chain : chains_) {
+    if (chain.state == State::kLeased) holders.insert(chain.holder);
+  }
+  return uint32_t(holders.size());
 }
 
 uint32_t ChainScheduler::waitingCount() const {

@@ -77,6 +77,8 @@ class ChainScheduler {
   bool allFinished() const { return finished_ == chains_.size(); }
   uint32_t finishedCount() const { return uint32_t(finished_); }
   uint32_t leasedCount() const;
+  // Distinct workers holding a lease of one of the chains.
+  uint32_t holderCount() const;
   uint32_t waitingCount() const;
   // Mutations (or samples) accepted from the chain so far.
   int64_t chainMutations(uint32_t chain) const { return chains_.at(chain).mutationsDone; }

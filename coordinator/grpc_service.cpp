@@ -4,11 +4,14 @@
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <thread>
 
 #include "coordinator/coordinator.h"
 #include "proto/convert.h"
@@ -105,6 +108,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   m->set_chains_total(p.chainsTotal);
   m->set_chains_finished(p.chainsFinished);
   m->set_chains_leased(p.chainsLeased);
+  m->set_active_workers(p.activeWorkers);
   m->set_has_reference(p.hasReference);
   for (const ErrorSample& e : p.errorSeries) {
     v1::ErrorSample* s = m->add_error_series();
@@ -183,6 +187,7 @@ class ClientService final : public v1::ClientApi::Service {
  public:
   ClientService(Coordinator* coordinator, const CallGuard* guard)
       : coordinator_(coordinator), guard_(guard) {}
+  static constexpr int kMaxWatches = 256;
 
   grpc::Status MissingBlobs(grpc::ServerContext* context, const v1::MissingBlobsRequest* request,
                             v1::MissingBlobsResponse* response) override {
@@ -333,6 +338,48 @@ class ClientService final : public v1::ClientApi::Service {
     return grpc::Status::OK;
   }
 
+  // Progress every interval until the job ends, each error sample sent once. The call holds a
+  // server thread, so watches are capped; each ends within a step of the watcher leaving or
+  // the server stopping.
+  grpc::Status WatchJob(grpc::ServerContext* context, const v1::WatchJobRequest* request,
+                        grpc::ServerWriter<v1::JobProgress>* writer) override {
+    if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
+    grpc::Status check = checkId(request->job_id(), "job id");
+    if (!check.ok()) return check;
+    const auto interval = std::chrono::milliseconds(
+        request->interval_ms() == 0 ? 1000 : std::clamp(request->interval_ms(), 100u, 10000u));
+    struct Slot {
+      std::atomic<int>& count;
+      ~Slot() { --count; }
+    } slot{watches_};
+    if (++watches_ > kMaxWatches) {
+      return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+              std::to_string(kMaxWatches) +
+                  " watches are open on this coordinator, the most "
+                  "it serves; poll with GetProgress instead"};
+    }
+    uint32_t from = 0;
+    for (;;) {
+      JobProgress progress;
+      Status s = coordinator_->progress(request->job_id(), from, &progress);
+      if (!s.isOk()) return toGrpc(s);
+      v1::JobProgress message;
+      toProto(progress, &message);
+      if (!writer->Write(message)) return {grpc::StatusCode::CANCELLED, "the watcher went away"};
+      from = progress.errorSeriesTotal;
+      if (isTerminal(progress.phase)) return grpc::Status::OK;
+      const auto next = std::chrono::steady_clock::now() + interval;
+      while (std::chrono::steady_clock::now() < next) {
+        if (context->IsCancelled()) return {grpc::StatusCode::CANCELLED, "the watcher went away"};
+        if (stopping_) return {grpc::StatusCode::UNAVAILABLE, "the coordinator is shutting down"};
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
+    }
+  }
+
+  // Ends every watch at its next step (before the server's Shutdown waits for calls).
+  void stop() { stopping_ = true; }
+
   grpc::Status FetchImage(grpc::ServerContext* context, const v1::FetchImageRequest* request,
                           grpc::ServerWriter<v1::ImageChunk>* writer) override {
     if (grpc::Status denied = allow(*guard_, context, Role::kSubmit); !denied.ok()) return denied;
@@ -394,6 +441,8 @@ class ClientService final : public v1::ClientApi::Service {
  private:
   Coordinator* coordinator_;
   const CallGuard* guard_;
+  std::atomic<int> watches_{0};
+  std::atomic<bool> stopping_{false};
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -736,6 +785,7 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
   void shutdown() override {
     if (!server_) return;
     coordinator_->releaseLeaseWaiters();  // else Shutdown waits out their calls
+    clientService_.stop();                // and watches
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
     server_->Wait();
     server_.reset();

@@ -765,6 +765,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
     p.chainsTotal = scheduler_->chainCount();
     p.chainsFinished = scheduler_->finishedCount();
     p.chainsLeased = scheduler_->leasedCount();
+    p.activeWorkers = scheduler_->holderCount();
   }
   const ProgressEstimate estimate = estimateProgress(
       p.workDone, p.plannedWork, settings_.timeBudgetSeconds, p.elapsedSeconds, p.renderSeconds);

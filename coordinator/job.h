@@ -76,6 +76,7 @@ struct JobProgress {
   int64_t bootstrapCandidates = 0;
   double loadSeconds = 0, bootstrapSeconds = 0, renderSeconds = 0;
   uint32_t chainsTotal = 0, chainsFinished = 0, chainsLeased = 0;
+  uint32_t activeWorkers = 0;  // distinct workers holding a lease of the job's chains
   bool hasReference = false;
   std::vector<ErrorSample> errorSeries;  // from the index asked for
   uint32_t errorSeriesTotal = 0;
