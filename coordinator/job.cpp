@@ -356,6 +356,14 @@ void Job::countFailureLocked(const std::string& worker, uint32_t chain, const st
                              ")";
   setAside_[worker] = reason;
   log(reason);
+  std::set<std::string>& blamed = setAsideBy_[chain];
+  blamed.insert(worker);
+  if (int(blamed.size()) >= kWorkersToBlameAChain && !isTerminal(phase_)) {
+    failLocked("chain " + std::to_string(chain) + " failed " + std::to_string(failures) +
+               " times on each of " + std::to_string(blamed.size()) + " workers (last: " + why +
+               "): the chain, not the workers, is at fault; the coordinator's log has each "
+               "failure");
+  }
 }
 
 void Job::checkpointLocked() {

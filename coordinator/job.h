@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -114,7 +115,10 @@ class Job {
   // series and its end there (coordinator/job_store.h); its lease epochs start at `firstEpoch`.
   // A worker that fails one chain `maxChainFailures` times (its lease expires without the
   // chain's end, or it sends the chain a flush of the wrong size or with bad values) gets no
-  // more of the job's chains; the job's progress names it and says why.
+  // more of the job's chains; the job's progress names it and says why. A chain that has had
+  // kWorkersToBlameAChain workers set aside fails the job: the chain, not the workers, is at
+  // fault, and without this the job would wait for ever for a worker that can run it.
+  static constexpr int kWorkersToBlameAChain = 3;
   Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
       Log log = {}, std::function<void()> workFreed = {}, JobStore* store = nullptr,
       uint64_t firstEpoch = 0, int maxChainFailures = 3);
@@ -209,6 +213,7 @@ class Job {
   const int maxChainFailures_;
   std::map<std::string, std::map<uint32_t, int>> chainFailures_;  // worker -> chain -> failures
   std::map<std::string, std::string> setAside_;                   // worker -> why
+  std::map<uint32_t, std::set<std::string>> setAsideBy_;  // chain -> workers it had set aside
 
   mutable std::mutex mutex_;
   mutable std::condition_variable endedSignal_;

@@ -47,9 +47,11 @@ int main(int argc, char** argv) {
                  "(default: a new directory under the system's temporary directory, and job "
                  "records in memory only)");
   int maxChainFailures = 3;
-  app.add_option("--max-chain-failures", maxChainFailures,
-                 "a worker whose lease of one chain expires (or that sends it a malformed flush) "
-                 "this many times gets no more chains of that job; the job's status names it")
+  app.add_option(
+         "--max-chain-failures", maxChainFailures,
+         "a worker whose lease of one chain expires (or that sends it a malformed flush) "
+         "this many times gets no more chains of that job; the job's status names it. A chain "
+         "that has had three workers set aside fails its job")
       ->check(CLI::Range(1, 1000000))
       ->default_str("3");
   int maxJobs = 100;

@@ -507,6 +507,39 @@ TEST(FaultsCountOnce, WorkerFailingAChainRepeatedlyIsSetAside) {
   finish(coordinator, job);
 }
 
+// A chain that fails on every worker that runs it (a path that crashes the renderer, say) must
+// not keep its job rendering for ever: once it has had three workers set aside, the job fails
+// and says which chain and why. Two are not enough (the test above: a third worker finishes).
+TEST(FaultsCountOnce, AChainThatFailsOnThreeWorkersFailsTheJob) {
+  testing::ScratchDir scratch("chain-to-blame");
+  CoordinatorOptions options;
+  options.dataDir = scratch.path();
+  options.leaseSeconds = 60;
+  options.maxChainFailures = 1;
+  Coordinator coordinator(options);
+  const std::string job = submitAndWait(coordinator, smallJob(Algorithm::PathTracing));
+  auto later = SteadyClock::now();
+  for (int w = 1; w <= Job::kWorkersToBlameAChain; ++w) {
+    JobProgress before;
+    coordinator.progress(job, 0, &before);
+    EXPECT_EQ(before.phase, JobPhase::kRendering) << "after " << w - 1 << " workers";
+    const std::string worker = registerWorker(coordinator);
+    std::vector<WorkerLease> leases;
+    ASSERT_TRUE(coordinator.leaseChains(worker, 8, &leases).isOk());
+    ASSERT_EQ(leases.size(), 2u) << "worker " << w;
+    later += std::chrono::seconds(61);
+    coordinator.tick(later);  // the leases expire: each chain fails once on this worker
+  }
+  JobPhase phase;
+  coordinator.waitForEnd(job, std::chrono::seconds(5), &phase);
+  EXPECT_EQ(phase, JobPhase::kFailed);
+  JobProgress p;
+  coordinator.progress(job, 0, &p);
+  EXPECT_NE(p.error.find("chain 0 failed 1 times on each of 3 workers"), std::string::npos)
+      << p.error;
+  EXPECT_NE(p.error.find("lease expired"), std::string::npos) << p.error;
+}
+
 TEST(CoordinatorCore, FailedSceneKeepsItsMessage) {
   testing::ScratchDir scratch("failed-scene");
   CoordinatorOptions options;
