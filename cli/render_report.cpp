@@ -92,24 +92,9 @@ std::string acceptanceLine(const JobProgress& p) {
   return line + "\n";
 }
 
-// The latest sample that measured the error against the reference, or that estimated it.
-static const ErrorSample* latestMeasured(const JobProgress& p) {
-  for (auto it = p.errorSeries.rbegin(); it != p.errorSeries.rend(); ++it)
-    if (it->relMse >= 0) return &*it;
-  return nullptr;
-}
-static const ErrorSample* latestEstimated(const JobProgress& p) {
-  for (auto it = p.errorSeries.rbegin(); it != p.errorSeries.rend(); ++it)
-    if (it->estimatedRelMse >= 0) return &*it;
-  return nullptr;
-}
-
-// A CSV or JSON value that may be absent (< 0).
+// A CSV value that may be absent (< 0).
 static std::string csvValue(double v) {
   return v < 0 ? std::string() : format("%.9g", v);
-}
-static nlohmann::json jsonValue(double v) {
-  return v < 0 ? nlohmann::json(nullptr) : nlohmann::json(v);
 }
 
 std::string progressLine(const JobProgress& p, int barWidth) {
@@ -183,59 +168,6 @@ std::string statusText(const JobProgress& p) {
   }
   out << estimateLine(p);
   return out.str();
-}
-
-nlohmann::json progressJson(const JobProgress& p) {
-  nlohmann::json j;
-  j["job_id"] = p.jobId;
-  j["phase"] = jobPhaseName(p.phase);
-  j["error"] = p.error;
-  j["name"] = p.name;
-  j["algorithm"] = algorithmName(p.settings.algorithm);
-  j["width"] = p.width;
-  j["height"] = p.height;
-  j["seed"] = p.settings.seed;
-  j["fraction"] = p.fraction;
-  j["work_done"] = p.workDone;
-  j["planned_work"] = p.plannedWork;
-  j["samples_per_second"] = p.samplesPerSecond;
-  j["elapsed_seconds"] = p.elapsedSeconds;
-  j["eta_seconds"] = p.etaSeconds;
-  j["normalization"] = p.normalization;
-  j["normalization_std_error"] = p.normalizationStdError;
-  j["load_seconds"] = p.loadSeconds;
-  j["bootstrap_seconds"] = p.bootstrapSeconds;
-  j["bootstrap_candidates"] = p.bootstrapCandidates;
-  j["render_seconds"] = p.renderSeconds;
-  j["chains_total"] = p.chainsTotal;
-  j["chains_finished"] = p.chainsFinished;
-  j["chains_leased"] = p.chainsLeased;
-  j["active_workers"] = p.activeWorkers;
-  j["rejected_splats"] = {{"total", p.rejected.total()},
-                          {"nan", p.rejected.nan},
-                          {"infinite", p.rejected.infinite},
-                          {"negative", p.rejected.negative}};
-  j["rays"] = p.rays;
-  j["rays_per_second"] = p.raysPerSecond;
-  j["has_reference"] = p.hasReference;
-  j["warnings"] = p.warnings;
-  j["render_plan"] = p.renderPlan;
-  j["set_aside"] = p.setAside;
-  nlohmann::json tallies = nlohmann::json::object();
-  for (const MutationTally& t : p.tallies) {
-    tallies[t.name] = {{"proposed", t.proposed},
-                       {"accepted", t.accepted},
-                       {"acceptance", t.proposed > 0 ? double(t.accepted) / t.proposed : 0.0}};
-  }
-  j["mutations"] = tallies;
-  const ErrorSample* measured = latestMeasured(p);
-  j["rmse"] = measured ? jsonValue(measured->rmse) : nlohmann::json(nullptr);
-  j["relmse"] = measured ? jsonValue(measured->relMse) : nlohmann::json(nullptr);
-  const ErrorSample* estimated = latestEstimated(p);
-  j["estimated_relmse"] =
-      estimated ? jsonValue(estimated->estimatedRelMse) : nlohmann::json(nullptr);
-  j["until_error"] = jsonValue(p.settings.untilError > 0 ? p.settings.untilError : -1);
-  return j;
 }
 
 std::string finalReport(const JobProgress& p, const std::string& scene,
@@ -331,15 +263,7 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
   j["bootstrap_share"] = p.elapsedSeconds > 0 ? p.bootstrapSeconds / p.elapsedSeconds : 0.0;
   j["normalization_relative_std_error"] = relativeZError(p);
   j["pixel_error_model"] = pixelErrorModel(p);
-  nlohmann::json series = nlohmann::json::array();
-  for (const ErrorSample& e : p.errorSeries) {
-    series.push_back({{"elapsed_seconds", e.elapsedSeconds},
-                      {"samples", e.samples},
-                      {"rmse", jsonValue(e.rmse)},
-                      {"relmse", jsonValue(e.relMse)},
-                      {"estimated_relmse", jsonValue(e.estimatedRelMse)}});
-  }
-  j["error_vs_time"] = series;
+  j["error_vs_time"] = errorSeriesJson(p);
   const std::string jsonPath = (fs::path(dir) / "report.json").string();
   std::ofstream out(jsonPath);
   out << j.dump(2) << "\n";

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "coordinator/job.h"
+#include "coordinator/progress_json.h"  // progressJson
 
 namespace farm {
 
@@ -15,7 +16,6 @@ std::string formatCount(double value);       // "950", "12.3k", "4.56M", "7.89G"
 std::string progressLine(const JobProgress& progress, int barWidth = 30);
 // Several lines for `farm status`.
 std::string statusText(const JobProgress& progress);
-nlohmann::json progressJson(const JobProgress& progress);
 
 // The closing report of `farm render` (and `farm fetch`): Z with its error, the bootstrap's
 // share of the time, samples, time, error against the reference.

@@ -183,11 +183,15 @@ uint32_t ChainScheduler::leasedCount() const {
 }
 
 uint32_t ChainScheduler::holderCount() const {
-  std::set<std::string> holders;
+  return uint32_t(holders().size());
+}
+
+std::map<std::string, uint32_t> ChainScheduler::holders() const {
+  std::map<std::string, uint32_t> held;
   for (const Chain& chain : chains_) {
-    if (chain.state == State::kLeased) holders.insert(chain.holder);
+    if (chain.state == State::kLeased) ++held[chain.holder];
   }
-  return uint32_t(holders.size());
+  return held;
 }
 
 uint32_t ChainScheduler::waitingCount() const {

@@ -5,6 +5,7 @@
 // that dies costs at most one flush interval (DESIGN.md, "The work unit").
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,8 @@ class ChainScheduler {
   uint32_t leasedCount() const;
   // Distinct workers holding a lease of one of the chains.
   uint32_t holderCount() const;
+  // Leases held, by worker.
+  std::map<std::string, uint32_t> holders() const;
   uint32_t waitingCount() const;
   // Mutations (or samples) accepted from the chain so far.
   int64_t chainMutations(uint32_t chain) const { return chains_.at(chain).mutationsDone; }

@@ -262,6 +262,7 @@ Status Coordinator::registerWorker(const WorkerInfo& info, std::string* workerId
     id = randomId("worker-");
   } while (workers_.count(id));
   workers_[id] = info;
+  activity_[id].registered = activity_[id].lastContact = SteadyClock::now();
   *workerId = id;
   if (options_.log) {
     options_.log("worker " + id + " registered (" + info.host + ", " +
@@ -279,7 +280,55 @@ Status Coordinator::findWorker(const std::string& workerId, WorkerInfo* info) co
                             "' (register first; a restarted coordinator forgets workers)");
   }
   if (info) *info = it->second;
+  activity_[workerId].lastContact = SteadyClock::now();
   return Status::ok();
+}
+
+void Coordinator::countAccepted(const std::string& workerId, int64_t work, int64_t flushes) {
+  if (flushes == 0) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  WorkerActivity& a = activity_[workerId];
+  a.workAccepted += work;
+  a.flushesAccepted += flushes;
+}
+
+std::vector<WorkerStatus> Coordinator::workers() const {
+  std::vector<std::shared_ptr<Job>> jobs;
+  std::vector<WorkerStatus> out;
+  const auto now = SteadyClock::now();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs = jobs_;
+    for (const auto& [id, info] : workers_) {
+      WorkerStatus w;
+      w.id = id;
+      w.host = info.host;
+      w.version = info.version;
+      w.threads = info.threads;
+      auto a = activity_.find(id);
+      if (a != activity_.end()) {
+        w.registeredSeconds = std::chrono::duration<double>(now - a->second.registered).count();
+        w.lastContactSeconds = std::chrono::duration<double>(now - a->second.lastContact).count();
+        w.workAccepted = a->second.workAccepted;
+        w.flushesAccepted = a->second.flushesAccepted;
+      }
+      out.push_back(std::move(w));
+    }
+  }
+  for (const auto& job : jobs) {
+    for (const auto& [holder, chains] : job->leaseHolders()) {
+      for (WorkerStatus& w : out) {
+        if (w.id == holder) w.chains += chains;
+      }
+    }
+  }
+  return out;
+}
+
+Status Coordinator::currentImage(const std::string& jobId, Image* image) const {
+  auto job = findJob(jobId);
+  if (!job) return unknownJob(jobId);
+  return job->currentImage(image);
 }
 
 std::vector<WorkerLease> Coordinator::leaseNow(const std::string& workerId,
@@ -377,7 +426,10 @@ Status Coordinator::acceptFlush(const std::string& workerId, const std::string& 
   if (!status.isOk()) return status;
   auto job = findJob(jobId);
   if (!job) return unknownJob(jobId);
-  return job->acceptFlush(workerId, epoch, std::move(flush), SteadyClock::now(), ack, wire);
+  const int64_t work = flush.mutations;
+  status = job->acceptFlush(workerId, epoch, std::move(flush), SteadyClock::now(), ack, wire);
+  if (status.isOk() && ack->result == FlushAck::Result::kAccepted) countAccepted(workerId, work, 1);
+  return status;
 }
 
 Status Coordinator::acceptBatch(const std::string& workerId, const std::string& jobId,
@@ -387,7 +439,19 @@ Status Coordinator::acceptBatch(const std::string& workerId, const std::string& 
   if (!status.isOk()) return status;
   auto job = findJob(jobId);
   if (!job) return unknownJob(jobId);
-  return job->acceptBatch(workerId, std::move(batch), SteadyClock::now(), acks, wire);
+  std::vector<int64_t> work;
+  for (const auto& entry : batch.entries) work.push_back(entry.mutations);
+  status = job->acceptBatch(workerId, std::move(batch), SteadyClock::now(), acks, wire);
+  if (status.isOk()) {
+    int64_t accepted = 0, flushes = 0;
+    for (size_t i = 0; i < acks->size() && i < work.size(); ++i) {
+      if ((*acks)[i].result != FlushAck::Result::kAccepted) continue;
+      accepted += work[i];
+      ++flushes;
+    }
+    countAccepted(workerId, accepted, flushes);
+  }
+  return status;
 }
 
 }  // namespace farm

@@ -40,6 +40,17 @@ struct WorkerInfo {
   std::set<Algorithm> capabilities;
 };
 
+// A registered worker as the web page and /metrics show it.
+struct WorkerStatus {
+  std::string id, host, version;
+  int threads = 0;
+  double registeredSeconds = 0;   // since it registered
+  double lastContactSeconds = 0;  // since its last call (lease, renewal, flush)
+  uint32_t chains = 0;            // leases it holds now, over all jobs
+  int64_t workAccepted = 0;       // mutations or samples of its accepted flushes
+  int64_t flushesAccepted = 0;
+};
+
 struct LeaseRef {
   std::string jobId;
   uint32_t chain = 0;
@@ -72,6 +83,10 @@ class Coordinator {
   Status finalImage(const std::string& jobId, Image* image, ImageMetadata* metadata) const;
   Status waitForEnd(const std::string& jobId, SteadyClock::duration timeout, JobPhase* phase) const;
   std::shared_ptr<const RenderJob> renderJob(const std::string& jobId) const;
+  // The image as it stands (rendering or done); kFailedPrecondition before any work arrived.
+  Status currentImage(const std::string& jobId, Image* image) const;
+  // Every registered worker, in id order.
+  std::vector<WorkerStatus> workers() const;
 
   // --- Worker side
   Status registerWorker(const WorkerInfo& info, std::string* workerId);
@@ -128,6 +143,13 @@ class Coordinator {
   std::vector<std::shared_ptr<Job>> jobs_;  // submission order
   std::map<std::string, std::shared_ptr<Job>> jobsById_;
   std::map<std::string, WorkerInfo> workers_;
+  struct WorkerActivity {
+    SteadyClock::time_point registered, lastContact;
+    int64_t workAccepted = 0, flushesAccepted = 0;
+  };
+  // Touched by every worker call (findWorker is const: its bookkeeping is mutable).
+  mutable std::map<std::string, WorkerActivity> activity_;
+  void countAccepted(const std::string& workerId, int64_t work, int64_t flushes);
 
   std::mutex housekeepingMutex_;
   std::condition_variable housekeepingWake_;

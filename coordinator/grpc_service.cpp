@@ -781,6 +781,7 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
 
   int port() const override { return port_; }
   std::string security() const override { return guard_->describe(); }
+  const CallGuard* guard() const override { return guard_.get(); }
 
   void shutdown() override {
     if (!server_) return;

@@ -27,6 +27,8 @@ class CoordinatorServer {
   virtual int port() const = 0;
   // What protects the listener, for the log: "TLS; tokens for submit and work".
   virtual std::string security() const = 0;
+  // The listener's token checks, for the web page (coordinator/http_service.h).
+  virtual const CallGuard* guard() const = 0;
   // Stops accepting calls and ends those in flight (after a short grace period).
   virtual void shutdown() = 0;
 };

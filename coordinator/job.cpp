@@ -830,6 +830,26 @@ Status Job::finalImage(Image* image, ImageMetadata* metadata) const {
   return status;
 }
 
+Status Job::currentImage(Image* image) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (finalImage_) {
+    *image = *finalImage_;
+    return Status::ok();
+  }
+  const int64_t work = aggregator_ ? aggregator_->workDone() : 0;
+  if (!renderJob_ || work <= 0) {
+    return Status::failedPrecondition("job " + id_ + " has no image yet (" + jobPhaseName(phase_) +
+                                      ", no work accepted)");
+  }
+  *image = renderJob_->resolve(aggregator_->sums(), renderJob_->imageScale(bootstrap_, work));
+  return Status::ok();
+}
+
+std::map<std::string, uint32_t> Job::leaseHolders() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return scheduler_ ? scheduler_->holders() : std::map<std::string, uint32_t>();
+}
+
 JobPhase Job::waitForEnd(SteadyClock::duration timeout) const {
   std::unique_lock<std::mutex> lock(mutex_);
   endedSignal_.wait_for(lock, timeout, [this] { return isTerminal(phase_); });

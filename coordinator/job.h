@@ -171,6 +171,11 @@ class Job {
   // The final EXR on disk; FailedPrecondition (saying why) unless the job is done.
   Status imageFile(std::string* path) const;
   Status finalImage(Image* image, ImageMetadata* metadata) const;
+  // The image as it stands: the final one once done, else the summed flushes resolved with
+  // the work so far; kFailedPrecondition before any work arrived.
+  Status currentImage(Image* image) const;
+  // Leases held now, by worker.
+  std::map<std::string, uint32_t> leaseHolders() const;
   // Blocks until the job is over or `timeout` passes; returns the phase.
   JobPhase waitForEnd(SteadyClock::duration timeout) const;
   // The renderer's job once loaded (null before): embedded workers run chains on it directly.

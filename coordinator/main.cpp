@@ -13,6 +13,7 @@
 
 #include "coordinator/coordinator.h"
 #include "coordinator/grpc_service.h"
+#include "coordinator/http_service.h"
 
 namespace {
 
@@ -84,6 +85,12 @@ int main(int argc, char** argv) {
                  "file whose first line is the token the worker API asks for; it must differ "
                  "from the submit token, and neither opens the other's API")
       ->envname("FARM_WORK_TOKEN_FILE");
+  std::string http;
+  app.add_option("--http", http,
+                 "HOST:PORT to serve a live web page on (jobs, a job's preview, error curve, "
+                 "settings and plan, the workers) and /metrics in the Prometheus text format; "
+                 "read-only, and with a submit token it asks for it (as the password of HTTP "
+                 "basic authentication). Plaintext: beyond loopback only with --insecure");
   app.add_flag("--insecure", security.insecure,
                "listen on an address other than loopback without TLS or without both tokens "
                "(refused otherwise: anyone who can reach the port could read images and tokens, "
@@ -166,10 +173,31 @@ int main(int argc, char** argv) {
   std::cout << "farm-coordinator listening on " << host << ":" << server->port() << " (data in "
             << dataDir << "; " << server->security() << ")" << std::endl;
 
+  std::unique_ptr<farm::HttpService> web;
+  if (!http.empty()) {
+    if (!farm::isLoopbackAddress(http) && !security.insecure) {
+      std::cerr << "farm-coordinator: refusing to serve the web page on " << http
+                << " in plaintext: anyone on the network could see the jobs and images. Serve "
+                   "it on loopback (and reach it through an SSH tunnel or a proxy with TLS), or "
+                   "pass --insecure\n";
+      server->shutdown();
+      return 1;
+    }
+    web = farm::HttpService::start(http, &coordinator, server->guard(), &error);
+    if (!web) {
+      std::cerr << "farm-coordinator: " << error << "\n";
+      server->shutdown();
+      return 1;
+    }
+    std::cout << "farm-coordinator web page on http://" << http.substr(0, http.rfind(':')) << ":"
+              << web->port() << "/" << std::endl;
+  }
+
   int signal = 0;
   sigwait(&signals, &signal);
   std::cerr << "farm-coordinator: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
             << ", shutting down\n";
+  if (web) web->stop();
   server->shutdown();
   return 0;
 }

@@ -10,6 +10,7 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libpugixml-dev libtinyobjloader-dev libassimp-dev libopenvdb-dev libboost-dev zlib1g-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libsqlite3-dev libzstd-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libcpp-httplib-dev chromium
   iproute2 openssl python3-grpcio python3-protobuf python3-numpy python3-openimageio python3-matplotlib
 )
 

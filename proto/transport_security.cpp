@@ -306,20 +306,28 @@ bool CallGuard::tls() const {
 }
 
 CallCheck CallGuard::check(const grpc::ServerContext& context, Role role) const {
+  const auto& metadata = context.client_metadata();
+  auto it = metadata.find(kAuthorization);
+  if (it == metadata.end()) return checkHeader("", false, role);
+  return checkHeader(std::string(it->second.data(), it->second.size()), true, role);
+}
+
+bool CallGuard::asksToken(Role role) const {
+  return !(role == Role::kSubmit ? impl_->submitDigest : impl_->workDigest).empty();
+}
+
+CallCheck CallGuard::checkHeader(const std::string& header, bool present, Role role) const {
   const std::string& wanted = role == Role::kSubmit ? impl_->submitDigest : impl_->workDigest;
   const std::string& other = role == Role::kSubmit ? impl_->workDigest : impl_->submitDigest;
   if (wanted.empty()) return {};
-  const auto& metadata = context.client_metadata();
-  auto it = metadata.find(kAuthorization);
   const std::string flag =
       role == Role::kSubmit ? "farm's --token-file" : "farm-worker's --token-file";
-  if (it == metadata.end()) {
+  if (!present) {
     return {CallCheck::Code::kUnauthenticated,
             std::string("this coordinator's ") + (role == Role::kSubmit ? "client" : "worker") +
                 " API needs the " + roleName(role) + " token and the call carried none (pass " +
                 flag + ")"};
   }
-  const std::string header(it->second.data(), it->second.size());
   const size_t prefix = sizeof(kBearer) - 1;
   const std::string digest =
       header.compare(0, prefix, kBearer) == 0 ? sha256Hex(header.substr(prefix)) : std::string();

@@ -79,6 +79,9 @@ class CallGuard {
   // "authorization: Bearer TOKEN" header must carry that role's token. A missing or unknown
   // token is kUnauthenticated; the other role's token is kPermissionDenied.
   CallCheck check(const grpc::ServerContext& context, Role role) const;
+  // The same for an "authorization" header's value (empty: none), for the web page.
+  CallCheck checkHeader(const std::string& authorization, bool present, Role role) const;
+  bool asksToken(Role role) const;
   // For the log line: "TLS with client certificates; tokens for submit and work", or
   // "plaintext (loopback only); no tokens: anyone on this host may submit and work".
   std::string describe() const;
