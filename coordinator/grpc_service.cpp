@@ -765,6 +765,7 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
     grpc::reflection::InitProtoReflectionServerBuilderPlugin();
     grpc::ServerBuilder builder;
     builder.AddListeningPort(address, guard_->credentials(), &port_);
+    serverKeepalive(&builder);
     builder.SetMaxReceiveMessageSize(kMaxMessageBytes);
     builder.SetMaxSendMessageSize(kMaxMessageBytes);
     builder.RegisterService(&clientService_);

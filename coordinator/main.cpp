@@ -1,7 +1,6 @@
 // farm-coordinator: accepts jobs from `farm submit`, bootstraps them, leases chains to
 // farm-worker processes and sums their flushes into the final image.
 #include <pthread.h>
-#include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -14,6 +13,7 @@
 #include "coordinator/coordinator.h"
 #include "coordinator/grpc_service.h"
 #include "coordinator/http_service.h"
+#include "ops/structured_log.h"
 
 namespace {
 
@@ -95,6 +95,8 @@ int main(int argc, char** argv) {
                "listen on an address other than loopback without TLS or without both tokens "
                "(refused otherwise: anyone who can reach the port could read images and tokens, "
                "submit jobs or pose as a worker)");
+  std::string logFormatName = "text";
+  farm::addLogFormatOption(&app, &logFormatName);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -104,21 +106,27 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  farm::LogFormat logFormat = farm::LogFormat::kText;
+  farm::parseLogFormat(logFormatName, &logFormat);
+  farm::setUpLogging("farm-coordinator", logFormat);
+  // From here on, what ends the process goes to the log too (one JSON object in json mode).
+  auto fatal = [&](const std::string& message) {
+    return farm::logFatal("farm-coordinator", logFormat, message, 1);
+  };
+
   const bool temporaryDataDir = dataDir.empty();
   if (temporaryDataDir) {
     dataDir = makeTempDataDir();
     if (dataDir.empty()) {
-      std::cerr << "farm-coordinator: cannot create a data directory under "
-                << std::filesystem::temp_directory_path() << "\n";
-      return 1;
+      return fatal("cannot create a data directory under " +
+                   std::filesystem::temp_directory_path().string());
     }
   }
   std::error_code ec;
   std::filesystem::create_directories(dataDir, ec);
   if (ec || !std::filesystem::is_directory(dataDir)) {
-    std::cerr << "farm-coordinator: cannot use data directory '" << dataDir
-              << "': " << (ec ? ec.message() : "not a directory") << "\n";
-    return 1;
+    return fatal("cannot use data directory '" + dataDir +
+                 "': " + (ec ? ec.message() : "not a directory"));
   }
 
   // SIGINT and SIGTERM are taken by sigwait below; block them before any thread starts so that
@@ -129,8 +137,6 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
-  spdlog::set_default_logger(spdlog::stderr_logger_mt("farm-coordinator"));
-  spdlog::set_pattern("[%Y-%m-%d %H:%M:%S.%e] [farm-coordinator] %v");
   farm::CoordinatorOptions options;
   options.dataDir = dataDir;
   options.leaseSeconds = leaseSeconds;
@@ -147,16 +153,14 @@ int main(int argc, char** argv) {
   try {
     coordinatorPtr = std::make_unique<farm::Coordinator>(options);
   } catch (const std::exception& e) {
-    std::cerr << "farm-coordinator: " << e.what() << "\n";
-    return 1;
+    return fatal(e.what());
   }
   farm::Coordinator& coordinator = *coordinatorPtr;
   std::string error;
   auto server = farm::CoordinatorServer::start(listen, &coordinator, security, &error);
   if (!server) {
-    std::cerr << "farm-coordinator: " << error << "\n";
     if (temporaryDataDir) std::filesystem::remove_all(dataDir, ec);
-    return 1;
+    return fatal(error);
   }
   std::string host = listen.substr(0, listen.rfind(':'));
   spdlog::info("serving {}", server->security());
@@ -176,18 +180,16 @@ int main(int argc, char** argv) {
   std::unique_ptr<farm::HttpService> web;
   if (!http.empty()) {
     if (!farm::isLoopbackAddress(http) && !security.insecure) {
-      std::cerr << "farm-coordinator: refusing to serve the web page on " << http
-                << " in plaintext: anyone on the network could see the jobs and images. Serve "
-                   "it on loopback (and reach it through an SSH tunnel or a proxy with TLS), or "
-                   "pass --insecure\n";
       server->shutdown();
-      return 1;
+      return fatal("refusing to serve the web page on " + http +
+                   " in plaintext: anyone on the network could see the jobs and images. Serve "
+                   "it on loopback (and reach it through an SSH tunnel or a proxy with TLS), or "
+                   "pass --insecure");
     }
     web = farm::HttpService::start(http, &coordinator, server->guard(), &error);
     if (!web) {
-      std::cerr << "farm-coordinator: " << error << "\n";
       server->shutdown();
-      return 1;
+      return fatal(error);
     }
     std::cout << "farm-coordinator web page on http://" << http.substr(0, http.rfind(':')) << ":"
               << web->port() << "/" << std::endl;
@@ -195,8 +197,7 @@ int main(int argc, char** argv) {
 
   int signal = 0;
   sigwait(&signals, &signal);
-  std::cerr << "farm-coordinator: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
-            << ", shutting down\n";
+  spdlog::info("{}, shutting down", signal == SIGINT ? "SIGINT" : "SIGTERM");
   if (web) web->stop();
   server->shutdown();
   return 0;

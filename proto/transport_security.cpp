@@ -26,6 +26,7 @@ constexpr char kBearer[] = "Bearer ";
 constexpr size_t kMinTokenChars = 16;
 constexpr size_t kMaxTokenChars = 4096;
 constexpr size_t kMaxPemBytes = 1 << 20;
+constexpr int kClientKeepaliveMs = 30000;
 
 bool readSmallFile(const std::string& path, const char* what, std::string* text,
                    std::string* error) {
@@ -208,14 +209,22 @@ std::shared_ptr<grpc::Channel> makeClientChannel(const std::string& address,
     }
     credentials = grpc::SslCredentials(options);
   }
+  // Keepalive: a coordinator that vanished behind a NAT or a dropped link is noticed within
+  // about 40 s (a ping every 30 s, 10 s to answer), not after TCP's minutes; the server allows
+  // pings this often (transport_security.h, serverKeepalive).
+  grpc::ChannelArguments withKeepalive = args;
+  withKeepalive.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, kClientKeepaliveMs);
+  withKeepalive.SetInt(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 10000);
+  withKeepalive.SetInt(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  withKeepalive.SetInt(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);
   std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
   if (!security.tokenFile.empty()) {
     std::string token;
     if (!readTokenFile(security.tokenFile, &token, error)) return nullptr;
     interceptors.push_back(std::make_unique<TokenInterceptorFactory>(std::move(token)));
   }
-  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args,
-                                                                 std::move(interceptors));
+  return grpc::experimental::CreateCustomChannelWithInterceptors(
+      address, credentials, withKeepalive, std::move(interceptors));
 }
 
 struct CallGuard::Impl {
@@ -295,6 +304,19 @@ std::unique_ptr<CallGuard> CallGuard::load(const std::string& address,
     }
   }
   return guard;
+}
+
+void serverKeepalive(grpc::ServerBuilder* builder) {
+  // Ping idle clients every 60 s and drop those that do not answer in 20 s (a worker host
+  // that died without closing its connection), and accept the clients' own pings every 30 s
+  // (kClientKeepaliveMs) without calls in flight: below the default 5 minutes gRPC would
+  // answer them with GOAWAY "too_many_pings".
+  builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, 60000);
+  builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 20000);
+  builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder->AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
+                              kClientKeepaliveMs / 2);
+  builder->AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 0);
 }
 
 std::shared_ptr<grpc::ServerCredentials> CallGuard::credentials() const {

@@ -12,6 +12,7 @@
 
 namespace grpc {
 class Channel;
+class ServerBuilder;
 class ChannelArguments;
 class ServerContext;
 class ServerCredentials;
@@ -54,6 +55,9 @@ std::shared_ptr<grpc::Channel> makeClientChannel(const std::string& address,
                                                  const ClientSecurity& security,
                                                  const grpc::ChannelArguments& args,
                                                  std::string* error);
+
+// The coordinator's keepalive, matched to the clients' (makeClientChannel pings every 30 s).
+void serverKeepalive(grpc::ServerBuilder* builder);
 
 // The outcome of checking one call's token.
 struct CallCheck {

@@ -1,6 +1,5 @@
 // farm-worker: runs chains for a farm-coordinator with all (or --threads) hardware threads.
 #include <pthread.h>
-#include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -12,6 +11,7 @@
 #include <iostream>
 #include <thread>
 
+#include "ops/structured_log.h"
 #include "worker/remote_chain_source.h"
 #include "worker/worker_pool.h"
 
@@ -66,6 +66,8 @@ int main(int argc, char** argv) {
   app.add_option("--token-file", security.tokenFile,
                  "file whose first line is the coordinator's work token")
       ->envname("FARM_WORKER_TOKEN_FILE");
+  std::string logFormatName = "text";
+  farm::addLogFormatOption(&app, &logFormatName);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -82,8 +84,12 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
-  spdlog::set_default_logger(spdlog::stderr_logger_mt("farm-worker"));
-  spdlog::set_pattern("[%Y-%m-%d %H:%M:%S.%e] [farm-worker] %v");
+  farm::LogFormat logFormat = farm::LogFormat::kText;
+  farm::parseLogFormat(logFormatName, &logFormat);
+  farm::setUpLogging("farm-worker", logFormat);
+  auto fatal = [&](const std::string& message, int code) {
+    return farm::logFatal("farm-worker", logFormat, message, code);
+  };
   auto log = [](const std::string& line) { spdlog::info("{}", line); };
 
   farm::RemoteSourceOptions options;
@@ -97,8 +103,7 @@ int main(int argc, char** argv) {
   try {
     sourcePtr = std::make_unique<farm::RemoteChainSource>(options);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "farm-worker: " << e.what() << "\n";
-    return 2;
+    return fatal(e.what(), 2);
   }
   farm::RemoteChainSource& source = *sourcePtr;
   farm::WorkerPoolOptions poolOptions;
@@ -141,8 +146,7 @@ int main(int argc, char** argv) {
   log("done: " + std::to_string(stats.chainsStarted) + " chains run, " +
       std::to_string(stats.flushesAccepted) + " flushes accepted" + uploads + streaming);
   if (!refused.empty()) {
-    std::cerr << "farm-worker: " << refused << "\n";
-    return 1;
+    return fatal(refused, 1);
   }
   return 0;
 }
