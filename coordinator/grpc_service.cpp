@@ -804,7 +804,41 @@ class GrpcCoordinatorServer final : public CoordinatorServer {
   int port_ = 0;
 };
 
+class GrpcHealthServer final : public HealthServer {
+ public:
+  bool start(const std::string& address, std::string* error) {
+    grpc::EnableDefaultHealthCheckService(true);
+    grpc::ServerBuilder builder;
+    builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &port_);
+    server_ = builder.BuildAndStart();  // the default health service is its only one
+    if (!server_ || port_ == 0) {
+      *error = "cannot serve health checks on '" + address + "' (in use, or not HOST:PORT)";
+      server_.reset();
+      return false;
+    }
+    return true;
+  }
+  int port() const override { return port_; }
+  void shutdown() override {
+    if (!server_) return;
+    server_->GetHealthCheckService()->Shutdown();
+    server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(1));
+    server_.reset();
+  }
+  ~GrpcHealthServer() override { shutdown(); }
+
+ private:
+  std::unique_ptr<grpc::Server> server_;
+  int port_ = 0;
+};
+
 }  // namespace
+
+std::unique_ptr<HealthServer> HealthServer::start(const std::string& address, std::string* error) {
+  auto server = std::make_unique<GrpcHealthServer>();
+  if (!server->start(address, error)) return nullptr;
+  return server;
+}
 
 std::unique_ptr<CoordinatorServer> CoordinatorServer::start(const std::string& address,
                                                             Coordinator* coordinator,

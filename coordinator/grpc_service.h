@@ -33,4 +33,14 @@ class CoordinatorServer {
   virtual void shutdown() = 0;
 };
 
+// A plaintext listener with nothing but grpc.health.v1.Health (no jobs, images or tokens to
+// protect): for probes that cannot speak TLS or carry a token, such as Kubernetes' gRPC probes.
+class HealthServer {
+ public:
+  static std::unique_ptr<HealthServer> start(const std::string& address, std::string* error);
+  virtual ~HealthServer() = default;
+  virtual int port() const = 0;
+  virtual void shutdown() = 0;
+};
+
 }  // namespace farm

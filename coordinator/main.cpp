@@ -85,6 +85,11 @@ int main(int argc, char** argv) {
                  "file whose first line is the token the worker API asks for; it must differ "
                  "from the submit token, and neither opens the other's API")
       ->envname("FARM_WORK_TOKEN_FILE");
+  std::string healthListen;
+  app.add_option("--health-listen", healthListen,
+                 "HOST:PORT for a plaintext listener with only the standard gRPC health service "
+                 "(grpc.health.v1), for probes that cannot use TLS or a token (Kubernetes' gRPC "
+                 "probes); it serves no jobs, images or tokens");
   std::string http;
   app.add_option("--http", http,
                  "HOST:PORT to serve a live web page on (jobs, a job's preview, error curve, "
@@ -177,6 +182,17 @@ int main(int argc, char** argv) {
   std::cout << "farm-coordinator listening on " << host << ":" << server->port() << " (data in "
             << dataDir << "; " << server->security() << ")" << std::endl;
 
+  std::unique_ptr<farm::HealthServer> health;
+  if (!healthListen.empty()) {
+    health = farm::HealthServer::start(healthListen, &error);
+    if (!health) {
+      server->shutdown();
+      return fatal(error);
+    }
+    std::cout << "farm-coordinator health checks on "
+              << healthListen.substr(0, healthListen.rfind(':')) << ":" << health->port()
+              << std::endl;
+  }
   std::unique_ptr<farm::HttpService> web;
   if (!http.empty()) {
     if (!farm::isLoopbackAddress(http) && !security.insecure) {
@@ -199,6 +215,7 @@ int main(int argc, char** argv) {
   sigwait(&signals, &signal);
   spdlog::info("{}, shutting down", signal == SIGINT ? "SIGINT" : "SIGTERM");
   if (web) web->stop();
+  if (health) health->shutdown();
   server->shutdown();
   return 0;
 }

@@ -4,10 +4,12 @@
 // did not sign the coordinator, a client certificate from the wrong CA, no token, a wrong token,
 // the other role's token. The exact gRPC codes are checked with stubs over the same channels
 // the farm's programs build (proto/transport_security.h).
+#include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <future>
 #include <string>
 #include <vector>
 
@@ -70,6 +72,30 @@ grpc::StatusCode registerWorker(const std::string& address, const ClientSecurity
                  message);
 }
 
+// grpc.health.v1.Health/Check in plaintext: the answer's bytes (08 01 is SERVING), or the
+// status's code.
+std::string healthCheck(const std::string& address) {
+  auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+  grpc::GenericStub stub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + seconds(5));
+  grpc::Slice empty("", 0);
+  grpc::ByteBuffer request(&empty, 1), response;
+  std::promise<grpc::Status> done;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&](grpc::Status s) { done.set_value(s); });
+  grpc::Status status = done.get_future().get();
+  if (!status.ok()) return "status " + std::to_string(int(status.error_code()));
+  std::vector<grpc::Slice> slices;
+  std::string bytes;
+  if (response.Dump(&slices).ok()) {
+    for (const grpc::Slice& slice : slices) {
+      bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+    }
+  }
+  return bytes;
+}
+
 std::vector<std::string> tlsArgs(const ClientSecurity& s) {
   std::vector<std::string> args;
   if (!s.caFile.empty()) args.insert(args.end(), {"--tls-ca", s.caFile});
@@ -95,11 +121,21 @@ TEST(SecureFarm, TlsAndTokensRenderAJobAndRefuseEveryWrongCaller) {
   CoordinatorProcess coordinator(
       scratch.path(), 5, 0, "coordinator",
       {"--tls-cert", pki.serverCert, "--tls-key", pki.serverKey, "--submit-token-file",
-       pki.submitToken, "--work-token-file", pki.workToken});
+       pki.submitToken, "--work-token-file", pki.workToken, "--health-listen", "127.0.0.1:0"});
   ASSERT_TRUE(coordinator.ok()) << coordinator.log();
   EXPECT_NE(coordinator.log().find("TLS; tokens for submit and work"), std::string::npos)
       << coordinator.log();
   const std::string address = coordinator.address();
+
+  // Probes that speak neither TLS nor tokens get the health service, and nothing else.
+  const std::string healthLine =
+      waitForText(scratch / "coordinator.out", "health checks on 127.0.0.1:", seconds(10));
+  const size_t at = healthLine.find("health checks on 127.0.0.1:");
+  ASSERT_NE(at, std::string::npos) << coordinator.log();
+  const std::string health = "127.0.0.1:" + std::to_string(std::atoi(healthLine.c_str() + at + 27));
+  EXPECT_EQ(healthCheck(health), std::string("\x08\x01", 2)) << "SERVING in plaintext";
+  EXPECT_EQ(listJobs(health, {"", "", "", pki.submitToken}), grpc::StatusCode::UNIMPLEMENTED)
+      << "the health listener must serve no job API";
 
   const ClientSecurity submit{pki.caCert, "", "", pki.submitToken};
   const ClientSecurity work{pki.caCert, "", "", pki.workToken};
