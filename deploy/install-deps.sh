@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages the farm builds and tests with. Idempotent: a machine that has
-# them all installs nothing and does not touch the network.
+# Installs the Debian 12 packages the farm builds and tests with, and the one npm package its
+# deploy test needs. Idempotent: a machine that has them all installs nothing and does not
+# touch the network.
 set -euo pipefail
 
 packages=(
@@ -11,7 +12,7 @@ packages=(
   libpugixml-dev libtinyobjloader-dev libassimp-dev libopenvdb-dev libboost-dev zlib1g-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libsqlite3-dev libzstd-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcpp-httplib-dev chromium
-  iproute2 openssl python3-grpcio python3-protobuf python3-numpy python3-openimageio python3-matplotlib
+  iproute2 openssl python3-grpcio python3-protobuf python3-yaml python3-numpy python3-openimageio python3-matplotlib
 )
 
 missing=()
@@ -19,13 +20,20 @@ for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 
-if ((${#missing[@]} == 0)); then
-  exit 0
+if ((${#missing[@]} > 0)); then
+  echo "deploy/install-deps.sh: installing ${missing[*]}" >&2
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -q
+  $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-echo "deploy/install-deps.sh: installing ${missing[*]}" >&2
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -q
-$sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
+# The Kubernetes schemas the deploy test validates the manifests against (npm registry, with
+# the machine's Node.js), under deploy/.npm (ignored by git).
+npm_dir="$(cd "$(dirname "$0")" && pwd)/.npm"
+if [ ! -f "$npm_dir/node_modules/kubernetes-models/package.json" ]; then
+  echo "deploy/install-deps.sh: installing kubernetes-models into $npm_dir" >&2
+  mkdir -p "$npm_dir"
+  npm install --prefix "$npm_dir" --no-audit --no-fund --loglevel=error kubernetes-models@4.5.1
+fi
