@@ -775,6 +775,10 @@ TEST(MitsubaLoaderErrorTest, BadPlyFiles) {
             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
             "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
             "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n");
+  // A count no file of this size can hold: refused before assimp allocates for it.
+  dir.write("absurd.ply",
+            "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+            "end_header\n0000");
   auto load = [&](const std::string& file) {
     return loadError(dir.write(
         file + ".xml", sceneXml("<shape type=\"ply\">\n<string name=\"filename\" value=\"" + file +
@@ -794,6 +798,11 @@ TEST(MitsubaLoaderErrorTest, BadPlyFiles) {
               std::string::npos)
         << msg;
   }
+  msg = load("absurd.ply");
+  EXPECT_NE(msg.find("cannot read PLY 'absurd.ply': the header declares elements that need at "
+                     "least 16000000000 bytes but only 4 follow it"),
+            std::string::npos)
+      << msg;
   for (const char* file : {"garbage.ply", "truncated.ply", "points.ply", "badindex.ply"}) {
     msg = load(file);
     EXPECT_NE(msg.find(std::string(":4: cannot read PLY '") + file + "': "), std::string::npos)

@@ -4,12 +4,119 @@
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
+#include <sstream>
+#include <utility>
+#include <vector>
 
 namespace farm {
+namespace {
+
+// A strict reading of the header before assimp sees the file. assimp's PLY importer trusts
+// what it is told: "element vertex 4000000000" in a 100-byte file makes it ask for 48 GB, and
+// a malformed format or element line made it read past its buffer (both found by
+// fuzz/fuzz_scene_loader; the inputs are in fuzz/corpus/scene_loader). So only headers made of
+// PLY's own lines, each well-formed, with known types, reach it, and their counts must fit
+// the bytes that follow: every element takes at least one byte (a binary property is one byte
+// or more, an ASCII row ends with a newline), a binary element without lists exactly the sum
+// of its properties' sizes.
+int plyTypeSize(const std::string& type) {
+  static const std::pair<const char*, int> kTypes[] = {
+      {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
+      {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
+      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+  for (const auto& [name, size] : kTypes) {
+    if (type == name) return size;
+  }
+  return 0;
+}
+
+void checkHeader(const std::string& bytes) {
+  const size_t end = bytes.find("\nend_header");
+  if (end == std::string::npos || end > (1 << 20)) {
+    throw std::runtime_error("the header has no 'end_header' line");
+  }
+  const size_t bodyStart = bytes.find('\n', end + 1);
+  const uint64_t body = bodyStart == std::string::npos ? 0 : bytes.size() - bodyStart - 1;
+  std::istringstream header(bytes.substr(0, end));
+  std::string line;
+  bool binary = false, sawFormat = false;
+  struct Element {
+    std::string name;
+    uint64_t count = 0;
+    uint64_t rowBytes = 0;  // binary: fixed bytes a row; lists add at least their count's size
+    bool hasList = false, hasProperty = false;
+  };
+  std::vector<Element> elements;
+  auto bad = [&](const std::string& why) {
+    throw std::runtime_error("the header line '" + line.substr(0, 80) + "' " + why);
+  };
+  while (std::getline(header, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    for (char c : line) {
+      if (static_cast<unsigned char>(c) < 0x20 && c != '\t') bad("holds a control character");
+    }
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string word; words >> word;) w.push_back(word);
+    if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+    if (w[0] == "ply") {
+      if (w.size() != 1) bad("is not 'ply'");
+    } else if (w[0] == "format") {
+      if (w.size() != 3 || w[2] != "1.0" ||
+          (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian")) {
+        bad("is not 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      }
+      binary = w[1] != "ascii";
+      sawFormat = true;
+    } else if (w[0] == "element") {
+      if (w.size() != 3 || w[2].find_first_not_of("0123456789") != std::string::npos ||
+          w[2].size() > 18) {
+        bad("is not 'element NAME COUNT'");
+      }
+      elements.push_back({w[1], std::stoull(w[2])});
+    } else if (w[0] == "property") {
+      if (elements.empty()) bad("comes before any element");
+      Element& e = elements.back();
+      if (w.size() == 5 && w[1] == "list") {
+        if (!plyTypeSize(w[2]) || !plyTypeSize(w[3])) bad("names an unknown type");
+        e.rowBytes += uint64_t(plyTypeSize(w[2]));
+        e.hasList = true;
+      } else if (w.size() == 3 && plyTypeSize(w[1])) {
+        e.rowBytes += uint64_t(plyTypeSize(w[1]));
+      } else {
+        bad("is not 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
+      }
+      e.hasProperty = true;
+    } else {
+      bad("is not PLY's (ply, format, comment, obj_info, element, property, end_header)");
+    }
+  }
+  if (!sawFormat) throw std::runtime_error("the header has no 'format' line");
+  uint64_t least = 0;
+  for (const Element& e : elements) {
+    if (e.count > 0 && !e.hasProperty) {
+      throw std::runtime_error("element '" + e.name + "' has no properties");
+    }
+    // At most 2^40 either way: the product below cannot overflow.
+    if (e.count > (uint64_t(1) << 40)) {
+      throw std::runtime_error("element '" + e.name + "' declares " + std::to_string(e.count) +
+                               " rows");
+    }
+    least += e.count * (binary ? e.rowBytes : 1);
+  }
+  if (least > body) {
+    throw std::runtime_error("the header declares elements that need at least " +
+                             std::to_string(least) + " bytes but only " + std::to_string(body) +
+                             " follow it (truncated, or a hostile count)");
+  }
+}
+
+}  // namespace
 
 PlyMesh parsePly(const std::string& bytes) {
   if (bytes.compare(0, 4, "ply\n") != 0 && bytes.compare(0, 5, "ply\r\n") != 0)
     throw std::runtime_error("not a PLY file (it does not start with the line 'ply')");
+  checkHeader(bytes);
   Assimp::Importer importer;
   // Only what a PLY needs: polygons to triangles, and nothing that invents geometry or normals
   // (the loader computes Mitsuba's smooth normals itself when the file has none).
