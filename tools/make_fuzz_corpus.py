@@ -70,6 +70,10 @@ scenes = {
     "ply-ascii": b"\x03ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                  b"property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
                  b"end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    "ply-empty-face-row": b"\x03ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                          b"property float y\nproperty float z\nelement face 2\n"
+                          b"property list uchar int vertex_indices\nend_header\n"
+                          b"0 0 0\n1 0 0\n0 1 0\n0\n3 0 1 2\n",
     "ply-absurd-counts": b"\x03ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
                          b"property float x\nend_header\n\0\0\0\0",
     "ply-truncated-binary": b"\x03ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"

@@ -4,6 +4,8 @@
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
+#include <cmath>
+#include <cstddef>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -113,20 +115,75 @@ void checkHeader(const std::string& bytes) {
 
 }  // namespace
 
+void triangulatePolygon(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& polygon,
+                        std::vector<uint32_t>& triangles) {
+  const size_t n = polygon.size();
+  auto fan = [&](const std::vector<uint32_t>& corners) {
+    for (size_t k = 1; k + 1 < corners.size(); ++k)
+      triangles.insert(triangles.end(), {corners[0], corners[k], corners[k + 1]});
+  };
+  if (n < 3) return;
+  if (n == 3 || n > kMaxEarClippedCorners) return fan(polygon);
+  // Newell's normal: the polygon's vector area (twice it), exact for planar polygons and a
+  // stable average for slightly warped ones.
+  Vec3f normal(0.0f);
+  for (size_t k = 0; k < n; ++k)
+    normal += cross(positions[polygon[k]], positions[polygon[(k + 1) % n]]);
+  const float ax = std::fabs(normal.x), ay = std::fabs(normal.y), az = std::fabs(normal.z);
+  if (!(ax + ay + az > 0)) return fan(polygon);
+  // Project onto the coordinate plane the normal is most along, flipped so that the polygon
+  // winds counter-clockwise there.
+  const int drop = ax >= ay && ax >= az ? 0 : (ay >= az ? 1 : 2);
+  const float sign = (drop == 0 ? normal.x : drop == 1 ? normal.y : normal.z) > 0 ? 1.0f : -1.0f;
+  std::vector<Vec2f> p(n);
+  for (size_t k = 0; k < n; ++k) {
+    const Vec3f& q = positions[polygon[k]];
+    p[k] = drop == 0 ? Vec2f(q.y, q.z) : drop == 1 ? Vec2f(q.z, q.x) : Vec2f(q.x, q.y);
+    p[k].y *= sign;
+  }
+  auto turn = [&](size_t a, size_t b, size_t c) {  // > 0: a, b, c turn left (counter-clockwise)
+    return (p[b].x - p[a].x) * (p[c].y - p[a].y) - (p[b].y - p[a].y) * (p[c].x - p[a].x);
+  };
+  std::vector<size_t> left(n);
+  for (size_t k = 0; k < n; ++k) left[k] = k;
+  std::vector<uint32_t> clipped;
+  while (left.size() > 3) {
+    const size_t m = left.size();
+    bool found = false;
+    for (size_t k = 0; k < m && !found; ++k) {
+      const size_t a = left[(k + m - 1) % m], b = left[k], c = left[(k + 1) % m];
+      if (!(turn(a, b, c) > 0)) continue;  // a reflex (or straight) corner is no ear
+      bool empty = true;
+      for (size_t j : left) {
+        if (j == a || j == b || j == c) continue;
+        if (turn(a, b, j) >= 0 && turn(b, c, j) >= 0 && turn(c, a, j) >= 0) {
+          empty = false;
+          break;
+        }
+      }
+      if (!empty) continue;
+      clipped.insert(clipped.end(), {polygon[a], polygon[b], polygon[c]});
+      left.erase(left.begin() + std::ptrdiff_t(k));
+      found = true;
+    }
+    if (!found) return fan(polygon);  // not simple: no ear left, so no clean split exists
+  }
+  clipped.insert(clipped.end(), {polygon[left[0]], polygon[left[1]], polygon[left[2]]});
+  triangles.insert(triangles.end(), clipped.begin(), clipped.end());
+}
+
 PlyMesh parsePly(const std::string& bytes) {
   if (bytes.compare(0, 4, "ply\n") != 0 && bytes.compare(0, 5, "ply\r\n") != 0)
     throw std::runtime_error("not a PLY file (it does not start with the line 'ply')");
   checkHeader(bytes);
   Assimp::Importer importer;
-  // Only what a PLY needs: polygons to triangles, and nothing that invents geometry or normals
-  // (the loader computes Mitsuba's smooth normals itself when the file has none).
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
-                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // No post-processing: assimp reads the rows, we check and triangulate them. Its Triangulate
+  // step aborts the process (an ai_assert compiled into Debian's build) on a face row with no
+  // indices, which its ValidateDataStructure step lets through (fuzz/corpus/scene_loader has the
+  // input), and a scene loader must not end the coordinator that reads it. The PLY importer
+  // keeps the file's shared vertices, so nothing needs joining either.
   const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(),
-                                                     aiProcess_Triangulate | aiProcess_SortByPType |
-                                                         aiProcess_JoinIdenticalVertices |
-                                                         aiProcess_ValidateDataStructure,
-                                                     "ply");
+                                                     aiProcess_ValidateDataStructure, "ply");
   if (!scene) {
     std::string reason = importer.GetErrorString();
     if (reason.empty()) reason = "unknown error";
@@ -135,14 +192,12 @@ PlyMesh parsePly(const std::string& bytes) {
   PlyMesh out;
   bool allNormals = true, allUvs = true;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
-    if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    allNormals = allNormals && mesh->HasNormals();
-    allUvs = allUvs && mesh->HasTextureCoords(0);
+    allNormals = allNormals && scene->mMeshes[m]->HasNormals();
+    allUvs = allUvs && scene->mMeshes[m]->HasTextureCoords(0);
   }
+  std::vector<uint32_t> polygon;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* mesh = scene->mMeshes[m];
-    if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     const uint32_t base = uint32_t(out.positions.size());
     for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
       const aiVector3D& p = mesh->mVertices[v];
@@ -158,13 +213,17 @@ PlyMesh parsePly(const std::string& bytes) {
     }
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
       const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices != 3) continue;  // sorted out above; a stray one is not a triangle
-      for (int k = 0; k < 3; ++k) {
+      // Points and lines (and empty rows) have no surface to render: left out, as before.
+      if (face.mNumIndices < 3) continue;
+      polygon.clear();
+      for (unsigned k = 0; k < face.mNumIndices; ++k) {
         if (face.mIndices[k] >= mesh->mNumVertices)
-          throw std::runtime_error("a face refers to vertex " + std::to_string(face.mIndices[k]) +
-                                   " of " + std::to_string(mesh->mNumVertices));
-        out.indices.push_back(base + face.mIndices[k]);
+          throw std::runtime_error("face " + std::to_string(f) + " refers to vertex " +
+                                   std::to_string(face.mIndices[k]) + ", out of range of " +
+                                   std::to_string(mesh->mNumVertices) + " vertices");
+        polygon.push_back(base + face.mIndices[k]);
       }
+      triangulatePolygon(out.positions, polygon, out.indices);
     }
   }
   if (out.indices.empty()) throw std::runtime_error("no triangles (only points or lines)");
