@@ -21,6 +21,7 @@
 #include "common/plan/scene_analysis.h"
 #include "common/render/algorithm_pilot.h"
 #include "common/scene/scene.h"
+#include "ops/client_security_options.h"
 
 namespace {
 
@@ -368,26 +369,6 @@ int runRender(const std::string& scene, const std::string& output, const RenderO
   return 0;
 }
 
-// The flags of every command that talks to a coordinator: TLS roots, a client certificate for
-// a coordinator that asks for one, and the submit token (proto/transport_security.h).
-void addClientSecurity(CLI::App* command, farm::ClientSecurity* security) {
-  command
-      ->add_option("--tls-ca", security->caFile,
-                   "PEM CA certificates to verify the coordinator's TLS certificate against "
-                   "(default: plaintext)")
-      ->envname("FARM_TLS_CA");
-  command
-      ->add_option("--tls-cert", security->certFile,
-                   "PEM client certificate, for a coordinator that asks for one (with --tls-key)")
-      ->envname("FARM_TLS_CERT");
-  command->add_option("--tls-key", security->keyFile, "PEM private key of --tls-cert")
-      ->envname("FARM_TLS_KEY");
-  command
-      ->add_option("--token-file", security->tokenFile,
-                   "file whose first line is the coordinator's submit token")
-      ->envname("FARM_TOKEN_FILE");
-}
-
 int connectTo(farm::FarmClient& client) {
   Status s = client.connect(5);
   if (!s.isOk()) return fail(s.message());
@@ -706,7 +687,7 @@ int main(int argc, char** argv) {
   std::string address, submitScene;
   RenderOptions submitOptions;
   submit->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  addClientSecurity(submit, &clientSecurity);
+  farm::addClientSecurityOptions(submit, &clientSecurity, "FARM", farm::Role::kSubmit);
   submit
       ->add_option("SCENE", submitScene,
                    "scene file: Mitsuba 0.6 XML, or pbrt-v3/v4 (.pbrt); its folder holds its "
@@ -720,7 +701,7 @@ int main(int argc, char** argv) {
   std::string job;
   bool json = false;
   status->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  addClientSecurity(status, &clientSecurity);
+  farm::addClientSecurityOptions(status, &clientSecurity, "FARM", farm::Role::kSubmit);
   status->add_option("JOB", job, "job id")->required();
   status->add_flag("--json", json, "print JSON instead of text");
 
@@ -730,7 +711,7 @@ int main(int argc, char** argv) {
   std::string fetchOutput;
   double timeout = 0;
   fetch->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  addClientSecurity(fetch, &clientSecurity);
+  farm::addClientSecurityOptions(fetch, &clientSecurity, "FARM", farm::Role::kSubmit);
   fetch->add_option("JOB", job, "job id")->required();
   fetch->add_option("-o,--output", fetchOutput, "output OpenEXR file")->required();
   fetch->add_option("--timeout", timeout, "give up after this many seconds (default: wait)")
@@ -744,7 +725,7 @@ int main(int argc, char** argv) {
       "ends; exits 0 when it is done");
   double watchInterval = 0.5;
   watch->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  addClientSecurity(watch, &clientSecurity);
+  farm::addClientSecurityOptions(watch, &clientSecurity, "FARM", farm::Role::kSubmit);
   watch->add_option("JOB", job, "job id")->required();
   watch->add_option("--interval", watchInterval, "seconds between updates (0.1 to 10)")
       ->check(CLI::Range(0.1, 10.0))
@@ -769,7 +750,7 @@ int main(int argc, char** argv) {
   compare->add_option("--report", compareDir, "the report directory")->required();
   compare->add_option("--coordinator", compareCoordinator,
                       "HOST:PORT of a farm-coordinator to render on (default: here)");
-  addClientSecurity(compare, &clientSecurity);
+  farm::addClientSecurityOptions(compare, &clientSecurity, "FARM", farm::Role::kSubmit);
   compare->add_option("--threads", compareThreads, "chain threads, rendering here")
       ->default_str(std::to_string(hardwareThreads));
   addRenderOptions(compare, &compareOptions);
@@ -782,7 +763,7 @@ int main(int argc, char** argv) {
       "(once done), chart and index.html");
   std::string reportJobDir;
   report->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  addClientSecurity(report, &clientSecurity);
+  farm::addClientSecurityOptions(report, &clientSecurity, "FARM", farm::Role::kSubmit);
   report->add_option("JOB", job, "job id")->required();
   report->add_option("DIR", reportJobDir, "the report directory")->required();
 
@@ -821,11 +802,11 @@ int main(int argc, char** argv) {
   // cancel, list
   CLI::App* cancel = app.add_subcommand("cancel", "cancel a job");
   cancel->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  addClientSecurity(cancel, &clientSecurity);
+  farm::addClientSecurityOptions(cancel, &clientSecurity, "FARM", farm::Role::kSubmit);
   cancel->add_option("JOB", job, "job id")->required();
   CLI::App* list = app.add_subcommand("list", "list the coordinator's jobs");
   list->add_option("--coordinator", address, "HOST:PORT of the farm-coordinator")->required();
-  addClientSecurity(list, &clientSecurity);
+  farm::addClientSecurityOptions(list, &clientSecurity, "FARM", farm::Role::kSubmit);
 
   try {
     app.parse(argc, argv);

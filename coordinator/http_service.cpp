@@ -134,7 +134,21 @@ class HttplibService final : public HttpService {
   HttplibService(Coordinator* coordinator, const CallGuard* guard)
       : coordinator_(coordinator), guard_(guard) {}
 
-  bool start(const std::string& address, std::string* error) {
+  bool start(const std::string& address, const ServerSecurity& security, std::string* error) {
+    if (!security.certFile.empty()) {
+      // The files were checked when the gRPC listener loaded them; this is OpenSSL reading them
+      // again for cpp-httplib.
+      server_ =
+          std::make_unique<httplib::SSLServer>(security.certFile.c_str(), security.keyFile.c_str());
+      if (!server_->is_valid()) {
+        *error = "cannot serve the web page over TLS with " + security.certFile + " and " +
+                 security.keyFile;
+        return false;
+      }
+      https_ = true;
+    } else {
+      server_ = std::make_unique<httplib::Server>();
+    }
     const size_t colon = address.rfind(':');
     if (colon == std::string::npos) {
       *error = "--http '" + address + "' is not HOST:PORT";
@@ -144,23 +158,24 @@ class HttplibService final : public HttpService {
     if (host.size() > 2 && host.front() == '[') host = host.substr(1, host.size() - 2);
     const int wanted = std::atoi(address.c_str() + colon + 1);
     routes();
-    port_ = wanted == 0 ? server_.bind_to_any_port(host)
-                        : (server_.bind_to_port(host, wanted) ? wanted : -1);
+    port_ = wanted == 0 ? server_->bind_to_any_port(host)
+                        : (server_->bind_to_port(host, wanted) ? wanted : -1);
     if (port_ <= 0) {
       *error = "cannot serve the web page on '" + address +
                "' (in use, or not an address of "
                "this host)";
       return false;
     }
-    thread_ = std::thread([this] { server_.listen_after_bind(); });
+    thread_ = std::thread([this] { server_->listen_after_bind(); });
     return true;
   }
 
   int port() const override { return port_; }
+  bool https() const override { return https_; }
 
   void stop() override {
     if (!thread_.joinable()) return;
-    server_.stop();
+    server_->stop();
     thread_.join();
   }
 
@@ -292,48 +307,48 @@ class HttplibService final : public HttpService {
   }
 
   void routes() {
-    server_.Get("/", [this](const httplib::Request& q, httplib::Response& r) {
+    server_->Get("/", [this](const httplib::Request& q, httplib::Response& r) {
       if (!allowed(q, r)) return;
       r.set_content(kPage, "text/html; charset=utf-8");
     });
-    server_.Get("/api/jobs", [this](const httplib::Request& q, httplib::Response& r) {
+    server_->Get("/api/jobs", [this](const httplib::Request& q, httplib::Response& r) {
       if (!allowed(q, r)) return;
       nlohmann::json jobs = nlohmann::json::array();
       for (const JobProgress& p : coordinator_->list()) jobs.push_back(progressJson(p));
       json(r, jobs);
     });
-    server_.Get(R"(/api/jobs/([A-Za-z0-9_-]{1,64}))",
-                [this](const httplib::Request& q, httplib::Response& r) {
-                  if (!allowed(q, r)) return;
-                  JobProgress p;
-                  Status s = coordinator_->progress(q.matches[1], 0, &p);
-                  if (!s.isOk()) return fail(r, s);
-                  nlohmann::json j = progressJson(p);
-                  j["error_vs_time"] = errorSeriesJson(p);
-                  j["settings"] = {{"algorithm", algorithmName(p.settings.algorithm)},
-                                   {"width", p.width},
-                                   {"height", p.height},
-                                   {"seed", p.settings.seed},
-                                   {"samples_per_pixel", p.settings.samplesPerPixel},
-                                   {"mutations_per_pixel", p.settings.mutationsPerPixel},
-                                   {"time_budget_seconds", p.settings.timeBudgetSeconds},
-                                   {"num_chains", p.settings.numChains}};
-                  json(r, j);
-                });
-    server_.Get(R"(/api/jobs/([A-Za-z0-9_-]{1,64})/preview\.png)",
-                [this](const httplib::Request& q, httplib::Response& r) {
-                  if (!allowed(q, r)) return;
-                  std::string png;
-                  Status s;
-                  if (!preview(q.matches[1], &png, &s)) return fail(r, s);
-                  r.set_header("Cache-Control", "no-store");
-                  r.set_content(png, "image/png");
-                });
-    server_.Get("/api/workers", [this](const httplib::Request& q, httplib::Response& r) {
+    server_->Get(R"(/api/jobs/([A-Za-z0-9_-]{1,64}))",
+                 [this](const httplib::Request& q, httplib::Response& r) {
+                   if (!allowed(q, r)) return;
+                   JobProgress p;
+                   Status s = coordinator_->progress(q.matches[1], 0, &p);
+                   if (!s.isOk()) return fail(r, s);
+                   nlohmann::json j = progressJson(p);
+                   j["error_vs_time"] = errorSeriesJson(p);
+                   j["settings"] = {{"algorithm", algorithmName(p.settings.algorithm)},
+                                    {"width", p.width},
+                                    {"height", p.height},
+                                    {"seed", p.settings.seed},
+                                    {"samples_per_pixel", p.settings.samplesPerPixel},
+                                    {"mutations_per_pixel", p.settings.mutationsPerPixel},
+                                    {"time_budget_seconds", p.settings.timeBudgetSeconds},
+                                    {"num_chains", p.settings.numChains}};
+                   json(r, j);
+                 });
+    server_->Get(R"(/api/jobs/([A-Za-z0-9_-]{1,64})/preview\.png)",
+                 [this](const httplib::Request& q, httplib::Response& r) {
+                   if (!allowed(q, r)) return;
+                   std::string png;
+                   Status s;
+                   if (!preview(q.matches[1], &png, &s)) return fail(r, s);
+                   r.set_header("Cache-Control", "no-store");
+                   r.set_content(png, "image/png");
+                 });
+    server_->Get("/api/workers", [this](const httplib::Request& q, httplib::Response& r) {
       if (!allowed(q, r)) return;
       json(r, workersJson());
     });
-    server_.Get("/metrics", [this](const httplib::Request& q, httplib::Response& r) {
+    server_->Get("/metrics", [this](const httplib::Request& q, httplib::Response& r) {
       if (!allowed(q, r)) return;
       r.set_content(metrics(), "text/plain; version=0.0.4");
     });
@@ -341,18 +356,20 @@ class HttplibService final : public HttpService {
 
   Coordinator* coordinator_;
   const CallGuard* guard_;
-  httplib::Server server_;
+  std::unique_ptr<httplib::Server> server_;  // an httplib::SSLServer with TLS
   std::thread thread_;
   int port_ = 0;
+  bool https_ = false;
 };
 
 }  // namespace
 
 std::unique_ptr<HttpService> HttpService::start(const std::string& address,
                                                 Coordinator* coordinator, const CallGuard* guard,
+                                                const ServerSecurity& security,
                                                 std::string* error) {
   auto service = std::make_unique<HttplibService>(coordinator, guard);
-  if (!service->start(address, error)) return nullptr;
+  if (!service->start(address, security, error)) return nullptr;
   return service;
 }
 

@@ -11,7 +11,9 @@
 //   /metrics                   the same figures in the Prometheus text format
 //
 // With a submit token, every request must carry it ("Authorization: Bearer TOKEN", or HTTP
-// basic authentication with the token as the password, which a browser asks for).
+// basic authentication with the token as the password, which a browser asks for). When the
+// coordinator serves TLS, so does the page (HTTPS with the same certificate and key; no client
+// certificate is asked of a browser: the token is the page's lock).
 // cpp-httplib stays in http_service.cpp.
 #include <memory>
 #include <string>
@@ -20,15 +22,20 @@ namespace farm {
 
 class Coordinator;
 class CallGuard;
+struct ServerSecurity;
 
 class HttpService {
  public:
   // Listens on `address` (HOST:PORT; port 0 picks one). `guard` (may be null: no token) is the
-  // gRPC listener's and must outlive the service. Null with *error when it cannot listen.
+  // gRPC listener's and must outlive the service. HTTPS when `security` names a certificate
+  // and key (the coordinator's own). Null with *error when it cannot listen or the certificate
+  // cannot be used.
   static std::unique_ptr<HttpService> start(const std::string& address, Coordinator* coordinator,
-                                            const CallGuard* guard, std::string* error);
+                                            const CallGuard* guard, const ServerSecurity& security,
+                                            std::string* error);
   virtual ~HttpService() = default;
   virtual int port() const = 0;
+  virtual bool https() const = 0;
   virtual void stop() = 0;
 };
 

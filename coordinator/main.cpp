@@ -95,7 +95,8 @@ int main(int argc, char** argv) {
                  "HOST:PORT to serve a live web page on (jobs, a job's preview, error curve, "
                  "settings and plan, the workers) and /metrics in the Prometheus text format; "
                  "read-only, and with a submit token it asks for it (as the password of HTTP "
-                 "basic authentication). Plaintext: beyond loopback only with --insecure");
+                 "basic authentication). HTTPS with --tls-cert/--tls-key (the same certificate); "
+                 "beyond loopback only with TLS and a submit token, or with --insecure");
   app.add_flag("--insecure", security.insecure,
                "listen on an address other than loopback without TLS or without both tokens "
                "(refused otherwise: anyone who can reach the port could read images and tokens, "
@@ -169,16 +170,8 @@ int main(int argc, char** argv) {
   }
   std::string host = listen.substr(0, listen.rfind(':'));
   spdlog::info("serving {}", server->security());
-  if (!farm::isLoopbackAddress(listen)) {
-    if (security.certFile.empty()) {
-      spdlog::warn(
-          "--insecure: listening on {}:{} in plaintext: jobs, images and any token "
-          "cross the network readable",
-          host, server->port());
-    } else if (security.submitTokenFile.empty() || security.workTokenFile.empty()) {
-      spdlog::warn("--insecure: listening on {}:{} without both tokens", host, server->port());
-    }
-  }
+  if (const std::string warning = server->guard()->exposureWarning(); !warning.empty())
+    spdlog::warn("{} ({}:{})", warning, host, server->port());
   std::cout << "farm-coordinator listening on " << host << ":" << server->port() << " (data in "
             << dataDir << "; " << server->security() << ")" << std::endl;
 
@@ -195,20 +188,23 @@ int main(int argc, char** argv) {
   }
   std::unique_ptr<farm::HttpService> web;
   if (!http.empty()) {
-    if (!farm::isLoopbackAddress(http) && !security.insecure) {
+    const bool locked = server->guard()->tls() && server->guard()->asksToken(farm::Role::kSubmit);
+    if (!farm::isLoopbackAddress(http) && !locked && !security.insecure) {
       server->shutdown();
-      return fatal("refusing to serve the web page on " + http +
-                   " in plaintext: anyone on the network could see the jobs and images. Serve "
-                   "it on loopback (and reach it through an SSH tunnel or a proxy with TLS), or "
-                   "pass --insecure");
+      return fatal(
+          "refusing to serve the web page on " + http +
+          (server->guard()->tls() ? " without a submit token" : " in plaintext (no --tls-cert)") +
+          ": anyone on the network could see the jobs and images. Serve it on loopback "
+          "(and reach it through an SSH tunnel), give the coordinator TLS and a submit "
+          "token, or pass --insecure");
     }
-    web = farm::HttpService::start(http, &coordinator, server->guard(), &error);
+    web = farm::HttpService::start(http, &coordinator, server->guard(), security, &error);
     if (!web) {
       server->shutdown();
       return fatal(error);
     }
-    std::cout << "farm-coordinator web page on http://" << http.substr(0, http.rfind(':')) << ":"
-              << web->port() << "/" << std::endl;
+    std::cout << "farm-coordinator web page on " << (web->https() ? "https" : "http") << "://"
+              << http.substr(0, http.rfind(':')) << ":" << web->port() << "/" << std::endl;
   }
 
   int signal = 0;

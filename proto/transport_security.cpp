@@ -379,4 +379,14 @@ std::string CallGuard::describe() const {
          "connect may " + (submit ? "work" : "submit");
 }
 
+std::string CallGuard::exposureWarning() const {
+  if (!impl_->exposed) return "";
+  if (!impl_->tls)
+    return "--insecure: listening beyond loopback in plaintext: jobs, images and any token cross "
+           "the network readable";
+  if (impl_->submitDigest.empty() || impl_->workDigest.empty())
+    return "--insecure: listening beyond loopback without both tokens";
+  return "";
+}
+
 }  // namespace farm

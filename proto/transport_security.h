@@ -89,6 +89,8 @@ class CallGuard {
   // For the log line: "TLS with client certificates; tokens for submit and work", or
   // "plaintext (loopback only); no tokens: anyone on this host may submit and work".
   std::string describe() const;
+  // What --insecure let through, for a warning in the log; empty when nothing was.
+  std::string exposureWarning() const;
   bool tls() const;
 
  private:

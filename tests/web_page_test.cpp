@@ -30,10 +30,11 @@ std::string chromiumPath() {
 }
 
 // The port of the page, from the coordinator's stdout.
-int webPort(const std::string& outPath) {
-  const std::string text = waitForText(outPath, "web page on http://127.0.0.1:", seconds(15));
-  const size_t at = text.find("web page on http://127.0.0.1:");
-  return at == std::string::npos ? 0 : std::atoi(text.c_str() + at + 29);
+int webPort(const std::string& outPath, const std::string& scheme = "http") {
+  const std::string line = "web page on " + scheme + "://127.0.0.1:";
+  const std::string text = waitForText(outPath, line, seconds(15));
+  const size_t at = text.find(line);
+  return at == std::string::npos ? 0 : std::atoi(text.c_str() + at + line.size());
 }
 
 // chromium, headless, on `url`: its DOM after the page's scripts ran (--dump-dom), or a
@@ -189,6 +190,74 @@ TEST(WebPage, AsksForTheSubmitTokenAndServesOnlyLoopbackWithoutInsecure) {
   EXPECT_EQ(exposed.exitCode, 1);
   EXPECT_NE(exposed.err.find("refusing to serve the web page on 0.0.0.0:0"), std::string::npos)
       << exposed.err;
+}
+
+// With TLS the page is HTTPS, with the coordinator's certificate: a client that trusts our CA
+// gets it (with the token), plaintext HTTP gets nothing, a client that trusts another CA refuses
+// the certificate. TLS and a submit token let the page listen beyond loopback.
+TEST(WebPage, ServesHttpsWithTheCoordinatorsCertificate) {
+  ScratchDir scratch("web-https");
+  const TestPki pki = makeTestPki(scratch.path());
+  ASSERT_EQ(pki.problem, "");
+  const std::vector<std::string> tls = {"--tls-cert",        pki.serverCert,        "--tls-key",
+                                        pki.serverKey,       "--submit-token-file", pki.submitToken,
+                                        "--work-token-file", pki.workToken};
+  std::vector<std::string> args = tls;
+  args.insert(args.end(), {"--http", "127.0.0.1:0"});
+  CoordinatorProcess coordinator(scratch.path(), 5, 0, "coordinator", args);
+  ASSERT_TRUE(coordinator.ok()) << coordinator.log();
+  const int port = webPort(scratch / "coordinator.out", "https");
+  ASSERT_GT(port, 0) << coordinator.log();
+  const std::string submitToken = lastLine(readFile(pki.submitToken));
+
+  httplib::SSLClient https("localhost", port);
+  https.set_ca_cert_path(pki.caCert.c_str());
+  https.enable_server_certificate_verification(true);
+  https.set_bearer_token_auth(submitToken.c_str());
+  auto page = https.Get("/");
+  ASSERT_TRUE(page) << httplib::to_string(page.error());
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("<title>farm</title>"), std::string::npos);
+  auto metrics = https.Get("/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_EQ(metrics->status, 200);
+  httplib::SSLClient anonymous("localhost", port);
+  anonymous.set_ca_cert_path(pki.caCert.c_str());
+  anonymous.enable_server_certificate_verification(true);
+  auto refused = anonymous.Get("/api/jobs");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 401) << "TLS does not stand in for the token";
+
+  httplib::Client plain("127.0.0.1", port);
+  plain.set_read_timeout(5, 0);
+  plain.set_bearer_token_auth(submitToken.c_str());
+  auto cleartext = plain.Get("/api/jobs");
+  EXPECT_FALSE(cleartext && cleartext->status == 200) << "the page answered in plaintext";
+
+  httplib::SSLClient distrusting("localhost", port);
+  distrusting.set_ca_cert_path(pki.rogueCert.c_str());
+  distrusting.enable_server_certificate_verification(true);
+  distrusting.set_bearer_token_auth(submitToken.c_str());
+  auto unverified = distrusting.Get("/api/jobs");
+  EXPECT_FALSE(unverified) << "a certificate our CA did not sign was accepted";
+  EXPECT_EQ(coordinator.process().stop(), 0);
+
+  // Beyond loopback: TLS and a submit token are enough; TLS without the token is not.
+  args = tls;
+  args.insert(args.end(), {"--listen", "127.0.0.1:0", "--http", "0.0.0.0:0"});
+  args.insert(args.begin(), FARM_COORDINATOR_BIN);
+  ChildProcess exposed(args, scratch / "exposed.out", scratch / "exposed.err");
+  EXPECT_NE(waitForText(scratch / "exposed.out", "web page on https://0.0.0.0:", seconds(15))
+                .find("https://0.0.0.0:"),
+            std::string::npos)
+      << readFile(scratch / "exposed.err");
+  EXPECT_EQ(exposed.stop(seconds(20)), 0);
+  CommandResult tokenless =
+      runCommand({FARM_COORDINATOR_BIN, "--listen", "127.0.0.1:0", "--tls-cert", pki.serverCert,
+                  "--tls-key", pki.serverKey, "--http", "0.0.0.0:0"},
+                 seconds(20), scratch.path());
+  EXPECT_EQ(tokenless.exitCode, 1);
+  EXPECT_NE(tokenless.err.find("without a submit token"), std::string::npos) << tokenless.err;
 }
 
 }  // namespace

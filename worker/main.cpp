@@ -11,6 +11,7 @@
 #include <iostream>
 #include <thread>
 
+#include "ops/client_security_options.h"
 #include "ops/structured_log.h"
 #include "worker/remote_chain_source.h"
 #include "worker/worker_pool.h"
@@ -54,18 +55,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 600.0))
       ->default_str("1");
   farm::ClientSecurity security;
-  app.add_option("--tls-ca", security.caFile,
-                 "PEM CA certificates to verify the coordinator's TLS certificate against "
-                 "(default: plaintext)")
-      ->envname("FARM_WORKER_TLS_CA");
-  app.add_option("--tls-cert", security.certFile,
-                 "PEM client certificate, for a coordinator that asks for one (with --tls-key)")
-      ->envname("FARM_WORKER_TLS_CERT");
-  app.add_option("--tls-key", security.keyFile, "PEM private key of --tls-cert")
-      ->envname("FARM_WORKER_TLS_KEY");
-  app.add_option("--token-file", security.tokenFile,
-                 "file whose first line is the coordinator's work token")
-      ->envname("FARM_WORKER_TOKEN_FILE");
+  farm::addClientSecurityOptions(&app, &security, "FARM_WORKER", farm::Role::kWork);
   std::string logFormatName = "text";
   farm::addLogFormatOption(&app, &logFormatName);
   try {
