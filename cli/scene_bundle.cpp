@@ -32,6 +32,15 @@ bool collectSceneBundle(const std::string& sceneFile, LocalBundle* bundle, std::
     *error = "cannot list the scene directory '" + root.string() + "': " + ec.message();
     return false;
   }
+  // Past the limits before anything is read: a scene file in a home directory would otherwise
+  // hash the whole directory and then be refused by the coordinator.
+  if (files.size() > kMaxBundleFiles) {
+    *error = "the scene's folder '" + root.string() + "' holds more than " +
+             std::to_string(kMaxBundleFiles) +
+             " files, the limit of a scene bundle (every file under the scene's folder is "
+             "sent): keep the scene and its meshes and textures in a folder of their own";
+    return false;
+  }
   std::sort(files.begin(), files.end());
   // Symbolic links are followed only to what lies inside the tree, judged by where they lead
   // after every link on the way is resolved.
@@ -68,6 +77,13 @@ bool collectSceneBundle(const std::string& sceneFile, LocalBundle* bundle, std::
     if (!problem.empty()) {
       if (warn) warn("leaving out a file: " + problem);
       continue;
+    }
+    if (bundle->totalBytes + size > kMaxBundleBytes) {
+      *error = "the files under the scene's folder '" + root.string() + "' add up to more than " +
+               std::to_string(kMaxBundleBytes >> 30) +
+               " GiB, the limit of a scene bundle: keep the scene and its meshes and textures in "
+               "a folder of their own";
+      return false;
     }
     BundleEntry entry;
     entry.path = relative;

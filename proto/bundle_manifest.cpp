@@ -47,7 +47,12 @@ std::string checkRelativePath(const std::string& path) {
 }
 
 std::string checkManifest(const BundleManifest& manifest) {
+  if (manifest.size() > kMaxBundleFiles) {
+    return "the bundle lists " + std::to_string(manifest.size()) + " files (limit " +
+           std::to_string(kMaxBundleFiles) + ")";
+  }
   std::set<std::string> seen;
+  uint64_t total = 0;
   for (const BundleEntry& e : manifest) {
     std::string problem = checkRelativePath(e.path);
     if (!problem.empty()) return problem;
@@ -60,6 +65,11 @@ std::string checkManifest(const BundleManifest& manifest) {
       return "file '" + e.path + "' is " + std::to_string(e.size) + " bytes (limit " +
              std::to_string(kMaxBlobBytes) + ")";
     }
+    total += e.size;  // each at most kMaxBlobBytes, at most kMaxBundleFiles of them: no overflow
+  }
+  if (total > kMaxBundleBytes) {
+    return "the bundle's files add up to " + std::to_string(total) + " bytes (limit " +
+           std::to_string(kMaxBundleBytes) + ")";
   }
   return "";
 }

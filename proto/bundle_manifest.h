@@ -25,7 +25,8 @@ std::string bundleHash(const BundleManifest& manifest);
 std::string checkRelativePath(const std::string& path);
 
 // Empty when every entry has a safe, unique path, a well-formed hash and a size within
-// kMaxBlobBytes; else one line saying what is wrong.
+// kMaxBlobBytes, and there are at most kMaxBundleFiles of them adding up to at most
+// kMaxBundleBytes; else one line saying what is wrong.
 std::string checkManifest(const BundleManifest& manifest);
 
 }  // namespace farm

@@ -28,4 +28,10 @@ inline constexpr uint64_t kMaxBundleFileBytes = 256ull * 1024 * 1024;
 // Largest blob the coordinator accepts in an upload (a bundle file or a reference image).
 inline constexpr uint64_t kMaxBlobBytes = kMaxBundleFileBytes;
 
+// A scene bundle's files and their total size: what one submit may ask the coordinator to store
+// (with --max-jobs, this bounds the disk that accepted jobs can take). A scene's folder past
+// these is almost always the wrong folder (a home directory), not a scene.
+inline constexpr size_t kMaxBundleFiles = 10000;
+inline constexpr uint64_t kMaxBundleBytes = 4ull * 1024 * 1024 * 1024;
+
 }  // namespace farm

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "proto/wire_limits.h"
 #include "tests/test_support.h"
 
 namespace farm {
@@ -41,6 +42,28 @@ TEST(SceneBundle, TakesTheFolderAndNoLinkOutOfIt) {
     EXPECT_NE(w.find("outside the scene's folder"), std::string::npos) << w;
   }
   EXPECT_EQ(bundle.scenePath, "scene.xml");
+}
+
+// A scene file dropped in a big folder (a home directory): refused before anything is hashed or
+// sent, with a message that says what to do.
+TEST(SceneBundle, AFolderPastTheBundleLimitsIsRefusedUpFront) {
+  testing::ScratchDir scratch("bundle-limits");
+  const fs::path folder = scratch / "home";
+  fs::create_directories(folder / "photos");
+  std::ofstream(folder / "scene.xml") << "<scene version=\"0.6.0\"/>\n";
+  for (size_t i = 0; i < kMaxBundleFiles; ++i)
+    std::ofstream(folder / "photos" / (std::to_string(i) + ".jpg"));
+  LocalBundle bundle;
+  std::string error;
+  EXPECT_FALSE(collectSceneBundle((folder / "scene.xml").string(), &bundle, &error, nullptr));
+  EXPECT_NE(error.find("more than 10000 files"), std::string::npos) << error;
+  EXPECT_NE(error.find("a folder of their own"), std::string::npos) << error;
+  // One file fewer is a bundle.
+  fs::remove(folder / "photos" / "0.jpg");
+  error.clear();
+  EXPECT_TRUE(collectSceneBundle((folder / "scene.xml").string(), &bundle, &error, nullptr))
+      << error;
+  EXPECT_EQ(bundle.manifest.size(), kMaxBundleFiles);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "proto/bundle_manifest.h"
+#include "proto/wire_limits.h"
 
 namespace farm {
 namespace {
@@ -48,6 +49,23 @@ TEST(BundleManifest, RejectsPathsOutsideTheBundle) {
   EXPECT_NE(checkManifest(twice), "");
   BundleManifest badHash{{"a", 1, "ABC"}};
   EXPECT_NE(checkManifest(badHash), "");
+}
+
+// What one submit may ask the coordinator to store: at most kMaxBundleFiles files adding up to
+// at most kMaxBundleBytes (each file within kMaxBlobBytes).
+TEST(BundleManifestTest, BoundsTheFilesAndTheirTotal) {
+  BundleManifest many;
+  for (size_t i = 0; i < kMaxBundleFiles; ++i)
+    many.push_back({"f" + std::to_string(i), 1, sha256Hex("x")});
+  EXPECT_EQ(checkManifest(many), "");
+  many.push_back({"one-more", 1, sha256Hex("x")});
+  EXPECT_NE(checkManifest(many).find("10001 files"), std::string::npos) << checkManifest(many);
+  BundleManifest big;
+  for (uint64_t total = 0; total + kMaxBlobBytes <= kMaxBundleBytes; total += kMaxBlobBytes)
+    big.push_back({"big" + std::to_string(big.size()), kMaxBlobBytes, sha256Hex("x")});
+  EXPECT_EQ(checkManifest(big), "") << "exactly the limit";
+  big.push_back({"last-byte", 1, sha256Hex("x")});
+  EXPECT_NE(checkManifest(big).find("add up to"), std::string::npos) << checkManifest(big);
 }
 
 }  // namespace

@@ -38,6 +38,13 @@ void checkHeader(const std::string& bytes) {
     throw std::runtime_error("the header has no 'end_header' line");
   }
   const size_t bodyStart = bytes.find('\n', end + 1);
+  // "end_header" alone on its line: assimp reads "end_header1 0 0" as no end of the header and
+  // spun for minutes in its allocator on such a file
+  // (fuzz/corpus/scene_loader/ply-end-header-run-on).
+  const size_t lineEnd = bodyStart == std::string::npos ? bytes.size() : bodyStart;
+  if (bytes.find_first_not_of(" \t\r", end + 11) < lineEnd) {
+    throw std::runtime_error("the 'end_header' line has more on it than 'end_header'");
+  }
   const uint64_t body = bodyStart == std::string::npos ? 0 : bytes.size() - bodyStart - 1;
   std::istringstream header(bytes.substr(0, end));
   std::string line;

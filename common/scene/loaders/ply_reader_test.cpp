@@ -97,6 +97,11 @@ TEST(PlyReader, MalformedFaceRowsAreRefusedNotFatal) {
   // An empty face row: assimp's own triangulation aborted the process on it (the fuzzer's
   // finding, fuzz/corpus/scene_loader/ply-fuzzer-empty-face-row). Left out like a point.
   EXPECT_THROW(parsePly(plyWithFaces("0\n", 1)), std::runtime_error);
+  // Rows run on after "end_header" on its own line (the fuzzer's input that made assimp spin
+  // for minutes): refused before assimp sees it.
+  std::string runOn = plyWithFaces("3 0 1 2\n", 1);
+  runOn.replace(runOn.find("end_header\n"), 11, "end_header");
+  EXPECT_THROW(parsePly(runOn), std::runtime_error);
   // Mixed: the empty row is dropped, the triangle kept.
   EXPECT_EQ(parsePly(plyWithFaces("0\n3 0 1 2\n", 2)).indices.size(), 3u);
 }
