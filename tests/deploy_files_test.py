@@ -3,12 +3,14 @@
 
 Every flag that the Dockerfile, the Kubernetes manifests, the systemd units and the Slurm
 script pass to farm-coordinator, farm-worker or farm must be one that program's --help lists
-(a renamed flag would otherwise break a deployment, not a build). The manifests must validate
-against the Kubernetes API's schemas (the kubernetes-models npm package that
-deploy/install-deps.sh installs under deploy/.npm; there is no cluster here to ask).
+(a renamed flag would otherwise break a deployment, not a build). The image's runtime stage
+must install every library the programs load. The manifests must validate against the
+Kubernetes API's schemas (the kubernetes-models npm package that deploy/install-deps.sh
+installs under deploy/.npm; there is no cluster here to ask).
 
 Run by ctest with FARM_COORDINATOR_BIN, FARM_WORKER_BIN, FARM_CLI_BIN and FARM_SOURCE_DIR set."""
 
+import functools
 import glob
 import json
 import os
@@ -68,7 +70,59 @@ def help_text(program, subcommand=None):
     return result.stdout + result.stderr
 
 
+# In debian:12-slim already: what dpkg and apt themselves load (libc6, libgcc-s1, libstdc++6,
+# zlib1g), so the Dockerfile need not name them.
+SLIM_BASE = {"libc6", "libgcc-s1", "libstdc++6", "zlib1g"}
+
+
+def runtime_packages():
+    """The packages the Dockerfile's last stage installs (its last apt-get install)."""
+    lines = joined_lines(os.path.join(DEPLOY, "Dockerfile"))
+    last_from = max(i for i, line in enumerate(lines) if line.startswith("FROM "))
+    for line in lines[last_from:]:
+        m = re.search(r"apt-get install ([^&]*)", line)
+        if m:
+            return {w for w in m.group(1).split() if not w.startswith("-")}
+    return set()
+
+
+@functools.lru_cache(maxsize=None)
+def package_of_library(soname):
+    """The Debian package that holds the shared library the loader finds for `soname`."""
+    cache = subprocess.run(["ldconfig", "-p"], capture_output=True, text=True).stdout
+    for line in cache.splitlines():
+        parts = line.split()
+        if parts and parts[0] == soname and "x86-64" in line:
+            path = os.path.realpath(parts[-1])
+            owner = subprocess.run(["dpkg", "-S", path], capture_output=True, text=True)
+            if owner.returncode != 0:  # merged /usr: dpkg knows the /lib name
+                owner = subprocess.run(["dpkg", "-S", path.replace("/usr/lib/", "/lib/", 1)],
+                                       capture_output=True, text=True)
+            if owner.returncode == 0:
+                return owner.stdout.split(":")[0]
+    return None
+
+
 class DeployFilesTest(unittest.TestCase):
+    def test_the_image_installs_every_library_the_programs_load(self):
+        # The image is not built here (no Docker): this is the check that its runtime stage
+        # would start the programs. Every library each binary names (DT_NEEDED; what those load
+        # in turn comes with the packages' own dependencies) must come from a package the last
+        # stage installs, or one debian:12-slim has.
+        installed = runtime_packages()
+        self.assertIn("libgrpc++1.51", installed, "the Dockerfile's package list was not found")
+        for program, binary in BINARIES.items():
+            dynamic = subprocess.run(["readelf", "-d", binary], capture_output=True, text=True,
+                                     check=True).stdout
+            needed = re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dynamic)
+            self.assertGreater(len(needed), 5, program)
+            for soname in needed:
+                package = package_of_library(soname)
+                self.assertIsNotNone(package, f"{program} loads {soname}, which no package holds")
+                self.assertIn(package, installed | SLIM_BASE,
+                              f"{program} loads {soname} from {package}, which deploy/Dockerfile's "
+                              f"runtime stage does not install")
+
     def test_every_flag_is_accepted_by_its_program(self):
         found = invocations()
         by_file = {}
