@@ -125,19 +125,19 @@ void checkHeader(const std::string& bytes) {
 void triangulatePolygon(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& polygon,
                         std::vector<uint32_t>& triangles) {
   const size_t n = polygon.size();
-  auto fan = [&](const std::vector<uint32_t>& corners) {
-    for (size_t k = 1; k + 1 < corners.size(); ++k)
-      triangles.insert(triangles.end(), {corners[0], corners[k], corners[k + 1]});
+  auto fan = [&] {
+    for (size_t k = 1; k + 1 < n; ++k)
+      triangles.insert(triangles.end(), {polygon[0], polygon[k], polygon[k + 1]});
   };
   if (n < 3) return;
-  if (n == 3 || n > kMaxEarClippedCorners) return fan(polygon);
+  if (n == 3 || n > kMaxEarClippedCorners) return fan();
   // Newell's normal: the polygon's vector area (twice it), exact for planar polygons and a
   // stable average for slightly warped ones.
   Vec3f normal(0.0f);
   for (size_t k = 0; k < n; ++k)
     normal += cross(positions[polygon[k]], positions[polygon[(k + 1) % n]]);
   const float ax = std::fabs(normal.x), ay = std::fabs(normal.y), az = std::fabs(normal.z);
-  if (!(ax + ay + az > 0)) return fan(polygon);
+  if (!(ax + ay + az > 0)) return fan();
   // Project onto the coordinate plane the normal is most along, flipped so that the polygon
   // winds counter-clockwise there.
   const int drop = ax >= ay && ax >= az ? 0 : (ay >= az ? 1 : 2);
@@ -173,7 +173,7 @@ void triangulatePolygon(const std::vector<Vec3f>& positions, const std::vector<u
       left.erase(left.begin() + std::ptrdiff_t(k));
       found = true;
     }
-    if (!found) return fan(polygon);  // not simple: no ear left, so no clean split exists
+    if (!found) return fan();  // not simple: no ear left, so no clean split exists
   }
   clipped.insert(clipped.end(), {polygon[left[0]], polygon[left[1]], polygon[left[2]]});
   triangles.insert(triangles.end(), clipped.begin(), clipped.end());
