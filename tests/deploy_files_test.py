@@ -87,10 +87,15 @@ def runtime_packages():
 
 
 @functools.lru_cache(maxsize=None)
+def loader_cache():
+    """`ldconfig -p`: the libraries the loader knows, read once."""
+    return subprocess.run(["ldconfig", "-p"], capture_output=True, text=True).stdout
+
+
+@functools.lru_cache(maxsize=None)
 def package_of_library(soname):
     """The Debian package that holds the shared library the loader finds for `soname`."""
-    cache = subprocess.run(["ldconfig", "-p"], capture_output=True, text=True).stdout
-    for line in cache.splitlines():
+    for line in loader_cache().splitlines():
         parts = line.split()
         if parts and parts[0] == soname and "x86-64" in line:
             path = os.path.realpath(parts[-1])
