@@ -131,11 +131,11 @@ TEST(FarmPlan, EachSharedSceneNamesWhatItLeavesOut) {
   EXPECT_EQ(bad.exitCode, 2);
   EXPECT_NE(bad.err.find("or auto, not 'photon'"), std::string::npos) << bad.err;
   CommandResult refused =
-      runCommand({FARM_CLI_BIN, "plan", std::string(FARM_TEST_DATA_DIR) + "/sky/scene.pbrt",
-                  "--algorithm", "mlt"},
+      runCommand({FARM_CLI_BIN, "plan", std::string(FARM_TEST_DATA_DIR) + "/smoke-room/scene.xml",
+                  "--algorithm", "erpt"},
                  seconds(30), scratch.path());
   EXPECT_EQ(refused.exitCode, 1);
-  EXPECT_NE(refused.err.find("an environment light is not supported by mlt"), std::string::npos)
+  EXPECT_NE(refused.err.find("density grids are not supported by erpt"), std::string::npos)
       << refused.err;
 }
 

@@ -168,8 +168,14 @@ void ManifoldNextEvent::sample(Sampler& sampler,
   const Camera& camera = scene_.camera();
   std::vector<PathVertex> cameraPath(1);
   cameraPath[0].kind = PathVertex::Kind::Camera;
-  cameraPath[0].p = camera.position();
-  Vec3f w = camera.generateRay(primarySampleFilmPoint(camera, sampler)).d;
+  const Vec2f film = primarySampleFilmPoint(camera, sampler);
+  // Through a thin lens, from a point of it, uniformly (its density is common to every
+  // strategy, as in BDPT's camera subpaths).
+  cameraPath[0].p =
+      camera.hasLens()
+          ? camera.lensPoint({sampler.next(kCameraStream), sampler.next(kCameraStream)})
+          : camera.position();
+  Vec3f w = camera.generateRay(film, cameraPath[0].p).d;
   // z at `depth` edges from the camera makes a path of depth + 2 edges.
   for (int depth = 1; depth + 2 <= maxLength_; ++depth) {
     PathVertex z;

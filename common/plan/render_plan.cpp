@@ -169,13 +169,17 @@ void RenderPlan::choose(Algorithm chosen) {
     manifoldNee.reason = std::string(algorithmName(algorithm)) + " has no bootstrap";
   }
   parts.push_back(manifoldNee);
-  // SeenEmission::separates: scenes without media (render_job.cpp plans the chains by it).
+  // SeenEmission::separates: scenes without media, through a pinhole (render_job.cpp plans the
+  // chains by it).
   const bool mediaInScene = s.homogeneousMedia + s.gridMedia > 0;
-  PlanPart seen{"seen emission apart", mlt && !mediaInScene, ""};
+  PlanPart seen{"seen emission apart", mlt && !mediaInScene && !s.thinLens, ""};
   seen.reason = !mlt ? std::string("only mlt's chains leave it to its own sampler, not ") +
                            algorithmName(algorithm) + "'s"
                 : mediaInScene
                     ? "media: the chains keep the lights they see (their edges carry transmittance)"
+                : s.thinLens
+                    ? "thin lens: the chains keep the lights they see (its sampler projects "
+                      "through a pinhole)"
                     : "the lights the camera sees directly are sampled beside the chains (film "
                       "points and light points projected onto the film), not left to how many "
                       "chains start on them";

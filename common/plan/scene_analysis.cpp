@@ -200,18 +200,12 @@ SceneAnalysis analyseScene(const Scene& scene) {
 std::string algorithmRefusal(const SceneDescription& desc, Algorithm algorithm) {
   const bool pathSpace = algorithm == Algorithm::MLT || algorithm == Algorithm::ERPT;
   const std::string name = algorithmName(algorithm);
-  // Path-space MLT and ERPT mutate paths with the camera vertex held where their seed put it:
-  // with a lens, the lens point would never move and the chains would not be ergodic.
-  if (pathSpace && desc.camera.lensRadius > 0) {
-    return "a thin lens camera is not supported by " + name +
-           " yet (its mutations keep each seed's lens point): use pt, bdpt, pssmlt, pssmlt-pt "
-           "or mmlt";
-  }
-  // Their path-space mutations build and perturb vertices at finite points only; a path from
-  // the environment (a vertex at infinity) is not one of theirs yet.
-  if (pathSpace && desc.environment.present) {
-    return "an environment light is not supported by " + name +
-           " yet (its mutations build paths from lights at finite points only): use pt, bdpt, "
+  // Path-space chains end camera subpaths on the environment where their rays leave the scene
+  // and connect to it along its direction; through media that would need each such edge's
+  // transmittance to infinity in their densities and moves, which they do not have yet.
+  if (pathSpace && desc.environment.present && !desc.media.empty()) {
+    return "an environment light in a scene with media is not supported by " + name +
+           " yet (its mutations end paths on the environment only in vacuum): use pt, bdpt, "
            "pssmlt, pssmlt-pt or mmlt";
   }
   // Participating media: path tracing and BDPT track them (and the primary-sample-space chains

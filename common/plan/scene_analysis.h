@@ -72,9 +72,8 @@ struct SceneAnalysis {
 SceneAnalysis analyseScene(const Scene& scene);
 
 // Why `algorithm` cannot render a scene with this description, for the user (one line), or
-// empty when it can: path-space MLT and ERPT hold each seed's lens point and build paths from
-// lights at finite points only; ERPT's chains cannot start from path tracing's estimate of a
-// grid's transmittance.
+// empty when it can: path-space MLT and ERPT build paths from lights at finite points only;
+// ERPT's chains cannot start from path tracing's estimate of a grid's transmittance.
 std::string algorithmRefusal(const SceneDescription& desc, Algorithm algorithm);
 
 }  // namespace farm

@@ -54,6 +54,14 @@ Vec3f Camera::lensPoint(const Vec2f& uLens) const {
   return position_ + (right_ * disk.x + up_ * disk.y) * lensRadius_;
 }
 
+bool Camera::onLens(const Vec3f& p) const {
+  const Vec3f offset = p - position_;
+  // lensPoint's rounding: a few ulps of the position and of the radius.
+  const float tolerance = 1e-5f * (maxAbsComponent(position_) + lensRadius_) + 1e-30f;
+  if (!(std::fabs(dot(offset, forward_)) <= tolerance)) return false;
+  return length(offset) <= lensRadius_ + tolerance;
+}
+
 Ray Camera::generateRay(const Vec2f& film, const Vec3f& lensPoint) const {
   float sx = (2 * film.x / width_ - 1) * tanHalfX_;
   float sy = (1 - 2 * film.y / height_) * tanHalfY_;

@@ -46,6 +46,9 @@ class Camera {
   Ray generateRay(const Vec2f& film, const Vec3f& lensPoint) const;
   // The pinhole's ray (from position()).
   Ray generateRay(const Vec2f& film) const { return generateRay(film, position_); }
+  // Whether p is a point of the lens (the position for a pinhole), to rounding: what a path's
+  // camera vertex must be.
+  bool onLens(const Vec3f& p) const;
   // Where the ray from lens point `lensPoint` in direction d (world, unit) comes from on the
   // film; false when outside.
   bool project(const Vec3f& lensPoint, const Vec3f& d, Vec2f* film) const;

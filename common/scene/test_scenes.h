@@ -66,15 +66,18 @@ inline SceneDescription whiteFurnace(float albedo, int maxDepth,
 // light's glint), so that every perturbation applies to some of them, through curved glass where
 // the Dirac lobes' solid-angle ratios do not cancel; and a light large enough that BDPT, where
 // the reference and the seeds come from, converges on all of them.
-inline std::string glassBallScene() {
-  static const std::string path = [] {
-    std::string p = (std::filesystem::temp_directory_path() / "mlt_glass_ball.xml").string();
-    std::ofstream(p) << R"(<?xml version="1.0"?>
+// Writes that scene to a temporary file `name`, the camera at `origin` looking at `target`,
+// with `extra` (an emitter, say) added: its path.
+inline std::string writeGlassBallScene(const std::string& name, const std::string& origin,
+                                       const std::string& target, const std::string& extra) {
+  std::string p = (std::filesystem::temp_directory_path() / name).string();
+  std::ofstream(p) << R"(<?xml version="1.0"?>
 <scene version="0.5.0">
   <integrator type="path"><integer name="maxDepth" value="8"/></integrator>
   <sensor type="perspective">
     <float name="fov" value="40"/>
-    <transform name="toWorld"><lookat origin="0, 2.5, -2.5" target="0, 0.3, 0" up="0, 1, 0"/>
+    <transform name="toWorld"><lookat origin=")"
+                   << origin << R"(" target=")" << target << R"(" up="0, 1, 0"/>
     </transform>
     <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/>
       <rfilter type="box"/></film>
@@ -96,10 +99,14 @@ inline std::string glassBallScene() {
     <ref id="black"/>
     <emitter type="area"><rgb name="radiance" value="20 20 20"/></emitter>
   </shape>
+  )" << extra << R"(
 </scene>
 )";
-    return p;
-  }();
+  return p;
+}
+inline std::string glassBallScene() {
+  static const std::string path =
+      writeGlassBallScene("mlt_glass_ball.xml", "0, 2.5, -2.5", "0, 0.3, 0", "");
   return path;
 }
 

@@ -54,6 +54,9 @@ class ScaledProduct {
 };
 
 constexpr uint32_t kPathMagic = 0x34485450;  // "PTH4": with texture coordinates, triangles, media
+// The kind byte of the environment's vertex at infinity (beyond PathVertex::Kind's values, so
+// that paths written before it read the same).
+constexpr uint8_t kInfiniteLightKind = 4;
 
 }  // namespace
 
@@ -245,7 +248,8 @@ std::string Path::serialize() const {
   appendBytes(s, kPathMagic);
   appendBytes(s, uint32_t(vertices.size()));
   for (const PathVertex& v : vertices) {
-    appendBytes(s, uint8_t(v.kind));
+    // The environment's vertex at infinity is a light vertex of its own kind on the wire.
+    appendBytes(s, atInfinity(v) ? kInfiniteLightKind : uint8_t(v.kind));
     for (const Vec3f* x : {&v.p, &v.n, &v.ns}) appendBytes(s, *x);
     appendBytes(s, v.uv);
     appendBytes(s, int32_t(v.shape));
@@ -276,8 +280,9 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
         !readBytes(bytes, at, &light) || !readBytes(bytes, at, &primitive) ||
         !readBytes(bytes, at, &medium))
       return false;
-    if (kind > uint8_t(PathVertex::Kind::Medium)) return false;
-    v.kind = PathVertex::Kind(kind);
+    if (kind > uint8_t(PathVertex::Kind::Medium) && kind != kInfiniteLightKind) return false;
+    v.infinite = kind == kInfiniteLightKind;
+    v.kind = v.infinite ? PathVertex::Kind::Light : PathVertex::Kind(kind);
     v.shape = shape;
     v.light = light;
     v.primitive = primitive;
@@ -293,6 +298,11 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
       if (i == 0 || medium < 0 || shape != -1 || light != -1 || primitive != -1 ||
           lengthSquared(v.n) != 0 || lengthSquared(v.ns) != 0)
         return false;
+    } else if (v.infinite) {
+      // The environment's direction: only x_0, a unit direction.
+      if (i != 0 || light != scene.environmentLight() || light < 0 || shape != -1 ||
+          primitive != -1 || medium != -1 || std::fabs(farm::length(v.n) - 1) > 1e-3f)
+        return false;
     } else if (!isCamera && shape == -1 && i == 0 && v.kind == PathVertex::Kind::Light) {
       // A point light's position (it has no shape).
       if (light < 0 || light >= lights || !scene.lights()[size_t(light)].isPoint() ||
@@ -302,7 +312,7 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
       if (shape < 0 || shape >= shapes) return false;
       if (light != scene.lightOf(shape)) return false;
       if (primitive < -1 || primitive >= scene.primitiveCount(shape)) return false;
-    } else if (shape != -1 || light != -1 || primitive != -1) {
+    } else if (shape != -1 || light != -1 || primitive != -1 || !scene.camera().onLens(v.p)) {
       return false;
     }
   }

@@ -170,6 +170,74 @@ TEST(Path, DeserializeRefusesWhatIsNotAPathOfTheScene) {
   std::string nanUv = bytes;
   std::memcpy(&nanUv[8 + 1 + 36], &qnan, sizeof(qnan));  // its texture coordinate u
   EXPECT_FALSE(x.deserialize(nanUv, *scene));
+  // A camera vertex that is not the camera's point (a pinhole here).
+  ASSERT_TRUE(x.deserialize(bytes, *scene));
+  x.vertices.back().p.x += 1e-3f;
+  EXPECT_FALSE(x.deserialize(x.serialize(), *scene));
+}
+
+// The environment's vertex at infinity round-trips, bit for bit, as x_0 only, a unit direction
+// on the scene's environment light.
+TEST(Path, DeserializeTakesTheEnvironmentsVertexAsTheLightEndOnly) {
+  RenderSettings settings;
+  settings.width = settings.height = 16;
+  auto scene = loadScene(std::string(FARM_TEST_DATA_DIR) + "/sky/scene.pbrt", settings);
+  ASSERT_GE(scene->environmentLight(), 0);
+  Path x;
+  BidirectionalTracer tracer(*scene, 4);
+  Rng rng(3, 3);
+  IndependentSampler sampler(&rng);
+  while (x.vertices.size() < 3) {
+    tracer.visitStrategies(
+        primarySampleFilmPoint(scene->camera(), sampler), sampler,
+        [&](const BidirectionalTracer::StrategyPath& sp) {
+          Path p = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+          if (x.vertices.size() < 3 && p.vertices.size() >= 3 && atInfinity(p[0])) x = p;
+        });
+  }
+  Path y;
+  ASSERT_TRUE(y.deserialize(x.serialize(), *scene));
+  EXPECT_TRUE(atInfinity(y[0]));
+  EXPECT_EQ(y.serialize(), x.serialize());
+  EXPECT_EQ(y.contribution(*scene, 4).logLuminance, x.contribution(*scene, 4).logLuminance);
+  Path bad = x;
+  bad[0].n = bad[0].n * 2.0f;  // not a direction
+  EXPECT_FALSE(y.deserialize(bad.serialize(), *scene));
+  bad = x;
+  bad[0].light = scene->environmentLight() + 1;  // not the environment
+  EXPECT_FALSE(y.deserialize(bad.serialize(), *scene));
+  bad = x;
+  bad[1] = x[0];  // at infinity in the middle of the path
+  EXPECT_FALSE(y.deserialize(bad.serialize(), *scene));
+}
+
+// Through a thin lens the camera vertex is any point of the lens, and nothing off it.
+TEST(Path, DeserializeTakesCameraVerticesOnTheLensOnly) {
+  RenderSettings settings;
+  auto scene = loadScene(std::string(FARM_TEST_DATA_DIR) + "/thin-lens/scene.pbrt", settings);
+  const Camera& camera = scene->camera();
+  ASSERT_TRUE(camera.hasLens());
+  Path x;
+  BidirectionalTracer tracer(*scene, 3);
+  Rng rng(2, 2);
+  IndependentSampler sampler(&rng);
+  while (x.vertices.empty()) {
+    tracer.visitStrategies(primarySampleFilmPoint(camera, sampler), sampler,
+                           [&](const BidirectionalTracer::StrategyPath& sp) {
+                             if (x.vertices.empty())
+                               x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
+                           });
+  }
+  Path y;
+  for (const Vec2f u : {Vec2f(0.5f, 0.5f), Vec2f(0, 0), Vec2f(1, 1), Vec2f(0.999f, 0.2f)}) {
+    x.vertices.back().p = camera.lensPoint(u);
+    EXPECT_TRUE(y.deserialize(x.serialize(), *scene)) << u.x << " " << u.y;
+  }
+  const float radius = scene->description().camera.lensRadius;
+  x.vertices.back().p = camera.position() + Vec3f(1.01f * radius, 0, 0);  // beyond its rim
+  EXPECT_FALSE(y.deserialize(x.serialize(), *scene));
+  x.vertices.back().p = camera.lensPoint(Vec2f(0.5f, 0.5f)) + camera.forward() * 1e-3f;
+  EXPECT_FALSE(y.deserialize(x.serialize(), *scene));  // off its plane
 }
 
 }  // namespace

@@ -7,7 +7,7 @@ namespace farm {
 SeenEmission::SeenEmission(const Scene& scene) : scene_(scene) {}
 
 bool SeenEmission::separates(const Scene& scene) {
-  return !scene.hasMedia();
+  return !scene.hasMedia() && !scene.camera().hasLens();
 }
 
 void SeenEmission::densities(int light, const Vec3f& y, const Vec3f& n, double* film,

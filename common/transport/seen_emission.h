@@ -30,7 +30,8 @@ class SeenEmission {
 
   // Whether path-space MLT renders the paths L E here rather than in its chains: in scenes
   // without media (through media an edge carries a transmittance estimate, which the chains'
-  // own paths handle and this estimator does not).
+  // own paths handle and this estimator does not), seen through a pinhole (this estimator
+  // projects through the camera's point, not through a lens).
   static bool separates(const Scene& scene);
 
   // One sample: the film point `film` (pixels) and a light point from `rng`; appends their

@@ -22,11 +22,13 @@ bool addedRange(int n, int nd, int maxDepth, int* lo, int* hi) {
   return *lo <= *hi;
 }
 
-// Weights of nd = 0 .. n - 1 (zero where no added count is possible) and their total.
-double removedWeights(int n, int maxDepth, std::vector<double>* weights) {
-  weights->assign(size_t(n), 0.0);
+// Weights of nd = 0 .. n - 1, and n through a thin lens (zero where no added count is
+// possible), and their total.
+double removedWeights(int n, int maxDepth, bool lens, std::vector<double>* weights) {
+  const int most = lens ? n : n - 1;
+  weights->assign(size_t(most + 1), 0.0);
   double total = 0;
-  for (int nd = 0; nd < n; ++nd) {
+  for (int nd = 0; nd <= most; ++nd) {
     int lo, hi;
     if (addedRange(n, nd, maxDepth, &lo, &hi))
       total += (*weights)[size_t(nd)] = std::ldexp(1.0, -nd);
@@ -46,15 +48,22 @@ double addedTotal(int n, int nd, int maxDepth) {
   return total;
 }
 
+// Where the deleted run of nd vertices may start: n - nd places that keep the camera, and
+// through a thin lens one more that deletes it (the run ending at the camera; none when nothing
+// is deleted).
+int runStarts(int n, int nd, bool lens) {
+  return n - nd + (lens && nd > 0 ? 1 : 0);
+}
+
 // log of the probability of the discrete choices (nd, start, na, split) for a path of n vertices.
-double logChoiceProbability(int n, int nd, int na, int maxDepth) {
+double logChoiceProbability(int n, int nd, int na, int maxDepth, bool lens) {
   std::vector<double> weights;
-  const double total = removedWeights(n, maxDepth, &weights);
-  if (nd < 0 || nd >= n || !(weights[size_t(nd)] > 0)) return -INFINITY;
+  const double total = removedWeights(n, maxDepth, lens, &weights);
+  if (nd < 0 || nd >= int(weights.size()) || !(weights[size_t(nd)] > 0)) return -INFINITY;
   int lo, hi;
   addedRange(n, nd, maxDepth, &lo, &hi);
   if (na < lo || na > hi) return -INFINITY;
-  return std::log(weights[size_t(nd)] / total) - std::log(double(n - nd)) +
+  return std::log(weights[size_t(nd)] / total) - std::log(double(runStarts(n, nd, lens))) +
          std::log(addedWeight(nd, na) / addedTotal(n, nd, maxDepth)) - std::log(double(na + 1));
 }
 
@@ -72,12 +81,13 @@ int sampleDiscrete(const std::vector<double>& weights, double total, Rng& rng) {
 
 // One step of a random walk: the vertex after `at` (which was reached from `from`, and lies in
 // medium `around`), its direction sampled by the BSDF at `at` in the given transport mode, or
-// by the phase function of the medium `at` lies in.
+// by the phase function of the medium `at` lies in. `mayEscape`: a ray that leaves the scene
+// ends on the environment (traceOrEscape), for the camera side's vertex that becomes x_0.
 bool scatterStep(const MutationContext& context, const PathVertex& at, const PathVertex& from,
-                 int around, TransportMode mode, Rng& rng, PathVertex* next) {
+                 int around, TransportMode mode, bool mayEscape, Rng& rng, PathVertex* next) {
   const Scene& scene = context.scene;
   if (!(lengthSquared(from.p - at.p) > 0)) return false;
-  Vec3f woWorld = normalize(from.p - at.p);
+  const Vec3f woWorld = directionBetween(at, from);  // `from` may be the environment's x_0
   if (inMedium(at)) {
     float pdf;
     const Vec3f w = scene.medium(at.medium).phase().sample(
@@ -93,7 +103,19 @@ bool scatterStep(const MutationContext& context, const PathVertex& at, const Pat
   if (!bsdf.sample(frame.toLocal(woWorld), u, mode, &bs)) return false;
   Vec3f w = normalize(frame.toWorld(bs.wi));
   if (!scene.sidesAgree(w, at.n, at.ns)) return false;
+  if (mayEscape) {
+    bool escaped;
+    return traceOrEscape(context, at, w, next, &escaped);
+  }
   return flyVertex(context, at, mediumLeaving(scene, at, w, around), w, rng, next);
+}
+
+// Whether an edge can join y[joint - 1] (the light side's end) and y[joint]: neither end
+// specular, and not the environment's direction to the camera, which reaches a point-like lens
+// with probability zero (as in BDPT).
+bool connectible(const Scene& scene, const Path& y, int joint) {
+  if (y.isSpecular(scene, joint - 1) || y.isSpecular(scene, joint)) return false;
+  return !(atInfinity(y[joint - 1]) && y[joint].kind == PathVertex::Kind::Camera);
 }
 
 }  // namespace
@@ -105,13 +127,16 @@ bool BidirectionalMutation::appliesTo(const Path& x) const {
 bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
                                     MutationRecord* record) const {
   const Scene& scene = context_.scene;
+  const Camera& camera = scene.camera();
+  const bool lens = camera.hasLens();
   const int n = int(x.vertices.size());
   std::vector<double> weights;
-  const double total = removedWeights(n, context_.maxDepth, &weights);
+  const double total = removedWeights(n, context_.maxDepth, lens, &weights);
   if (!(total > 0)) return false;
   const int nd = sampleDiscrete(weights, total, rng);
-  const int L = std::min(int(rng.nextDouble() * (n - nd)), n - nd - 1);
-  const int E = n - L - nd;
+  const int starts = runStarts(n, nd, lens);
+  const int L = std::min(int(rng.nextDouble() * starts), starts - 1);
+  const int E = n - L - nd;  // 0: the camera deleted, a new lens point first on its side
   int lo, hi;
   addedRange(n, nd, context_.maxDepth, &lo, &hi);
   std::vector<double> added(size_t(hi - lo + 1));
@@ -121,6 +146,7 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
   const int sLight = std::min(int(rng.nextDouble() * (na + 1)), na);
   const int tCamera = na - sLight;
   *record = {MutationType::Bidirectional, L, E, nd, na};
+  if (E == 0 && tCamera == 0) return false;  // the camera is grown from its own side only
   // The media around the kept ends, from x's walk (none without media).
   PathMedia xMedia;
   const bool media = scene.hasMedia();
@@ -134,18 +160,23 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
     const int index = L + j;
     PathVertex v;
     if (index == 0) {
-      // A light vertex as BDPT starts its light subpaths (the environment is refused when the
-      // scene loads).
+      // A light vertex as BDPT starts its light subpaths.
       if (scene.lights().empty()) return false;
       const float uPick = rng.nextFloat();
       const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
       if (!sampleLightVertex(scene, uPick, u, &v)) return false;
     } else if (index == 1) {
       // Its emission, as BDPT's light subpaths leave: a point light's direction by its own
-      // distribution, an area light's by Scene::sampleEmission.
+      // distribution, an area light's by Scene::sampleEmission, the environment's along its
+      // direction from a point of the disk facing it.
       const PathVertex& source = y->vertices[0];
       Vec2f u(rng.nextFloat(), rng.nextFloat());
       Vec3f w;
+      if (atInfinity(source)) {
+        if (!traceFromEnvironment(context_, source, u, &v)) return false;
+        y->vertices.push_back(v);
+        continue;
+      }
       if (onPointLight(source)) {
         float pdf;
         w = scene.pointLight(source.light).sampleDirection(u, &pdf);
@@ -165,7 +196,7 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
       const PathVertex& at = y->vertices[size_t(index - 1)];
       const int around = index - 1 < L ? aroundKept(index - 1) : arrived(at);
       if (!scatterStep(context_, at, y->vertices[size_t(index - 2)], around,
-                       TransportMode::Importance, rng, &v))
+                       TransportMode::Importance, false, rng, &v))
         return false;
     }
     y->vertices.push_back(v);
@@ -175,20 +206,33 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
   auto suffix = [&](int i) -> const PathVertex& { return x.vertices[size_t(n - E + i)]; };
   for (int j = 0; j < tCamera; ++j) {
     PathVertex v;
+    if (E == 0 && j == 0) {
+      // The camera deleted: a new point on the lens, uniformly.
+      v = x.vertices.back();
+      v.p = camera.lensPoint(Vec2f(rng.nextFloat(), rng.nextFloat()));
+      grown.push_back(v);
+      continue;
+    }
     const PathVertex& at = j == 0 ? suffix(0) : grown[size_t(j - 1)];
+    // The vertex that becomes x_0 may be the environment's, where the ray leaves the scene
+    // (path-space chains take an environment only without media).
+    const bool mayEscape =
+        scene.environmentLight() >= 0 && !media && L + sLight == 0 && j == tCamera - 1;
     if (at.kind == PathVertex::Kind::Camera) {
-      const Camera& camera = scene.camera();
       Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
-      if (!flyVertex(context_, at, media ? scene.cameraMedium() : -1,
-                     camera.generateRay(film, at.p).d, rng, &v))
+      const Vec3f w = camera.generateRay(film, at.p).d;
+      bool escaped;
+      if (mayEscape ? !traceOrEscape(context_, at, w, &v, &escaped)
+                    : !flyVertex(context_, at, media ? scene.cameraMedium() : -1, w, rng, &v))
         return false;
     } else {
       // Growing past the light (nothing deleted, the whole path kept on this side): a point light
-      // has no surface to scatter from.
-      if (onPointLight(at)) return false;
+      // has no surface to scatter from, and nothing lies beyond the environment.
+      if (onPointLight(at) || atInfinity(at)) return false;
       const PathVertex& from = j == 0 ? suffix(1) : (j == 1 ? suffix(0) : grown[size_t(j - 2)]);
       const int around = j == 0 ? aroundKept(n - E) : arrived(at);
-      if (!scatterStep(context_, at, from, around, TransportMode::Radiance, rng, &v)) return false;
+      if (!scatterStep(context_, at, from, around, TransportMode::Radiance, mayEscape, rng, &v))
+        return false;
     }
     grown.push_back(v);
   }
@@ -200,27 +244,32 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
   if (joint == 0) return (*y)[0].light >= 0;
   const PathVertex& a = (*y)[joint - 1];
   const PathVertex& b = (*y)[joint];
-  if (y->isSpecular(scene, joint - 1) || y->isSpecular(scene, joint)) return false;
+  if (!connectible(scene, *y, joint)) return false;
   return connectVertices(context_, a, b);
 }
 
 double BidirectionalMutation::logDensity(const Path& from, const Path& to,
                                          const MutationRecord& r) const {
   const Scene& scene = context_.scene;
+  const bool lens = scene.camera().hasLens();
   const int n = int(from.vertices.size()), nTo = int(to.vertices.size());
   if (n != r.keptLight + r.removed + r.keptCamera || nTo != r.keptLight + r.added + r.keptCamera)
     return -INFINITY;
-  const double logChoice = logChoiceProbability(n, r.removed, r.added, context_.maxDepth);
+  if (r.keptCamera == 0 && (!lens || r.removed == 0 || r.added == 0)) return -INFINITY;
+  const double logChoice = logChoiceProbability(n, r.removed, r.added, context_.maxDepth, lens);
   if (!std::isfinite(logChoice)) return -INFINITY;
   std::vector<double> pL(size_t(nTo), 0.0), pE(size_t(nTo), 0.0);
   std::vector<char> delta(size_t(nTo), 0);
   to.densities(scene, pL.data(), pE.data(), delta.data());
+  // A new lens point: uniform, density 1 in the lens's measure (see the header); only from the
+  // camera's side (pL is 0 there).
+  if (r.keptCamera == 0) pE[size_t(nTo - 1)] = 1.0;
   // In media, each new vertex's free flight from the side that grew it (the light vertex
-  // itself is sampled on its light, without one).
+  // itself is sampled on its light, and a lens point on the lens, without one).
   if (scene.hasMedia()) {
     PathMedia media;
     if (!to.media(scene, &media)) return -INFINITY;
-    for (int j = r.keptLight; j < r.keptLight + r.added; ++j) {
+    for (int j = r.keptLight; j < std::min(r.keptLight + r.added, nTo - 1); ++j) {
       if (j > 0) pL[size_t(j)] *= to.freeFlightDensity(scene, media, j, true);
       pE[size_t(j)] *= to.freeFlightDensity(scene, media, j, false);
     }
@@ -228,11 +277,13 @@ double BidirectionalMutation::logDensity(const Path& from, const Path& to,
   // Sum over the splits that could have grown the new vertices, in logarithms.
   double best = -INFINITY;
   std::vector<double> terms;
-  for (int s = 0; s <= r.added; ++s) {
+  // (A renewed lens point comes from the camera's side: the split that would grow it from the
+  // light's is not one.)
+  for (int s = 0; s <= r.added - (r.keptCamera == 0 ? 1 : 0); ++s) {
     const int joint = r.keptLight + s;
     if (joint == 0) {
       if (to[0].light < 0) continue;
-    } else if (to.isSpecular(scene, joint - 1) || to.isSpecular(scene, joint)) {
+    } else if (!connectible(scene, to, joint)) {
       continue;
     }
     double term = 0;

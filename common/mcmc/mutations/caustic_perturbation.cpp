@@ -8,13 +8,14 @@ namespace farm {
 
 namespace {
 
-// m: the first non-specular vertex before x_{k-1}, or -1 when the path does not end (L|D) S* D E.
+// m: the first non-specular vertex before x_{k-1}, or -1 when the path does not end (L|D) S* D E
+// or its chain starts at the environment (a direction, from no point to perturb it at).
 int chainStart(const Scene& scene, const Path& x) {
   const int k = x.length();
   if (k < 2 || x.isSpecular(scene, k - 1)) return -1;
   int m = k - 2;
   while (m > 0 && x.isSpecular(scene, m)) --m;
-  return x.isSpecular(scene, m) ? -1 : m;
+  return x.isSpecular(scene, m) || atInfinity(x[m]) ? -1 : m;
 }
 
 }  // namespace

@@ -10,9 +10,10 @@ namespace farm {
 namespace {
 
 // x_m, the first non-specular vertex from the camera, can be joined to what comes before it:
-// x_{m-1} is not specular, or x_m is the light itself.
+// x_{m-1} is not specular, or x_m is the light itself (not the environment, whose direction
+// no perturbed ray traces to).
 bool joinable(const Scene& scene, const Path& x, int m) {
-  if (m == 0) return x[0].light >= 0;
+  if (m == 0) return x[0].light >= 0 && !atInfinity(x[0]);
   return !x.isSpecular(scene, m - 1);
 }
 

@@ -36,18 +36,28 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
   const Camera& camera = scene.camera();
   // Walk from the camera through whatever Dirac lobes the new ray meets.
   std::vector<PathVertex> walk;  // from the camera towards the light
-  const PathVertex& eye = x.vertices.back();
+  // Through a thin lens, from a new lens point (uniform: density 1 in the lens's measure, see
+  // bidirectional_mutation.h), so that the chain moves over the lens.
+  PathVertex eye = x.vertices.back();
+  const bool lens = camera.hasLens();
+  if (lens) eye.p = camera.lensPoint(Vec2f(rng.nextFloat(), rng.nextFloat()));
   Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
   Vec3f w = camera.generateRay(film, eye.p).d;
   PathVertex previous = eye;
   int medium = scene.hasMedia() ? scene.cameraMedium() : -1;  // the flight's
+  // Where x_m is the light, a ray that leaves the scene may end on the environment (path-space
+  // chains take one only without media).
+  const bool mayEscape = m == 0 && scene.environmentLight() >= 0 && !scene.hasMedia();
   for (;;) {
     PathVertex v;
-    if (!flyVertex(context_, previous, medium, w, rng, &v)) return false;
+    bool escaped = false;
+    if (mayEscape ? !traceOrEscape(context_, previous, w, &v, &escaped)
+                  : !flyVertex(context_, previous, medium, w, rng, &v))
+      return false;
     walk.push_back(v);
     const int length = m + int(walk.size());  // edges of the path this would make
     if (context_.maxDepth >= 0 && length > context_.maxDepth) return false;
-    if (inMedium(v)) break;  // a vertex in a medium is not specular
+    if (escaped || inMedium(v)) break;  // the environment and media are not specular
     const Bsdf& bsdf = scene.bsdfAt(v.shape, v.uv);
     if (!bsdf.isDelta()) break;
     if (int(walk.size()) > kMaxSpecularChain) return false;
@@ -65,7 +75,9 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
   y->vertices.assign(x.vertices.begin(), x.vertices.begin() + m);
   y->vertices.insert(y->vertices.end(), walk.rbegin(), walk.rend());
   y->vertices.push_back(eye);
-  *record = {MutationType::LensSubpath, m, 1, n - 1 - m, int(walk.size())};
+  const int camerasRenewed = lens ? 1 : 0;
+  *record = {MutationType::LensSubpath, m, 1 - camerasRenewed, n - 1 - m + camerasRenewed,
+             int(walk.size()) + camerasRenewed};
   if (m == 0) return (*y)[0].light >= 0;
   return connectVertices(context_, (*y)[m - 1], (*y)[m]);
 }
@@ -74,8 +86,11 @@ double LensSubpathMutation::logDensity(const Path& from, const Path& to,
                                        const MutationRecord& r) const {
   const Scene& scene = context_.scene;
   const int nTo = int(to.vertices.size());
-  if (int(from.vertices.size()) != r.keptLight + r.removed + 1 ||
-      nTo != r.keptLight + r.added + 1 || r.added < 1)
+  // The camera is kept at a pinhole and renewed on a lens, always.
+  const int renewed = scene.camera().hasLens() ? 1 : 0;
+  if (r.keptCamera != 1 - renewed ||
+      int(from.vertices.size()) != r.keptLight + r.removed + r.keptCamera ||
+      nTo != r.keptLight + r.added + r.keptCamera || r.added < 1 + renewed)
     return -INFINITY;
   if (!isLensSubpath(scene, to, r.keptLight)) return -INFINITY;
   if (context_.maxDepth >= 0 && to.length() > context_.maxDepth) return -INFINITY;
@@ -92,7 +107,7 @@ double LensSubpathMutation::logDensity(const Path& from, const Path& to,
     if (!(p > 0)) return -INFINITY;
     logT += std::log(p);
   }
-  return logT;
+  return logT;  // (a new lens point adds log 1)
 }
 
 }  // namespace farm

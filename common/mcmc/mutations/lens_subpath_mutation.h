@@ -1,7 +1,8 @@
 #pragma once
 // The lens subpath mutation (Veach 1997, 11.4.4): replace the lens subpath, the camera and the
 // specular vertices in front of it up to the first non-specular vertex x_m, with a new one from
-// a fresh film point (uniform over the image), sampling the Dirac lobes it meets, and connect
+// a fresh film point (uniform over the image; through a thin lens from a fresh lens point,
+// uniform on the lens), sampling the Dirac lobes it meets, and connect
 // its new non-specular end to x_{m-1}. When x_m is the light (the light seen through glass or
 // directly), the new lens subpath must end on a light too. It moves the path across the image,
 // which the perturbations do only locally.

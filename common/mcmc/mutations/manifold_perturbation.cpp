@@ -18,7 +18,8 @@ bool ManifoldPerturbation::chainOf(const Path& x, int* e, int* m) const {
   if (*m < 2 || !x.isSpecular(scene, *m - 1)) return false;
   *e = *m - 1;
   while (*e > 0 && x.isSpecular(scene, *e)) --*e;
-  return isSpecularChain(scene, x, *e, *m);
+  // (A chain from the environment has no point at its start for the walk to hold.)
+  return !atInfinity(x[*e]) && isSpecularChain(scene, x, *e, *m);
 }
 
 bool ManifoldPerturbation::appliesTo(const Path& x) const {

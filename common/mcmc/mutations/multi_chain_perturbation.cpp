@@ -35,6 +35,7 @@ bool MultiChainPerturbation::propose(const Path& x, Rng& rng, Path* y,
   if (!perturbLensChain(context_, sizes_, x, m, rng, y)) return false;
   for (int c = m;;) {
     const int j = nextNonSpecular(scene, x, c);
+    if (atInfinity(x[j])) return false;  // no traced ray ends on the environment's direction
     Vec3f w =
         perturbDirection(tracedDirection(scene, x[c], x[c - 1]), sizes_.theta1, sizes_.theta2, rng);
     if (!followSpecularChain(context_, x, y, c, j, w)) return false;

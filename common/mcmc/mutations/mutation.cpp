@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "common/sampling/warp.h"
 #include "common/scene/scene.h"
 
 namespace farm {
@@ -34,6 +35,30 @@ bool traceVertex(const MutationContext& context, const PathVertex& from, const V
     ++context.rays;
     SurfaceHit h;
     if (!scene.intersect(ray, &h)) return false;
+    if (scene.hasMedia() && scene.isNullBoundary(h.shape)) {
+      ray = scene.spawnRay(h.p, h.ng, w);
+      continue;
+    }
+    *hit = surfaceVertex(scene, h);
+    return true;
+  }
+  return false;
+}
+
+bool traceOrEscape(const MutationContext& context, const PathVertex& from, const Vec3f& w,
+                   PathVertex* hit, bool* escaped) {
+  const Scene& scene = context.scene;
+  *escaped = false;
+  Ray ray = scene.spawnRay(from.p, from.n, w);
+  for (int crossing = 0; crossing < 1024; ++crossing) {
+    ++context.rays;
+    SurfaceHit h;
+    if (!scene.intersect(ray, &h)) {
+      if (scene.environmentLight() < 0 || scene.hasMedia()) return false;
+      *hit = vertexAtInfinity(scene, scene.environmentLight(), from.p, w);
+      *escaped = true;
+      return true;
+    }
     if (scene.hasMedia() && scene.isNullBoundary(h.shape)) {
       ray = scene.spawnRay(h.p, h.ng, w);
       continue;
@@ -86,8 +111,17 @@ int mediumLeaving(const Scene& scene, const PathVertex& v, const Vec3f& w, int a
 }
 
 bool connectVertices(const MutationContext& context, const PathVertex& a, const PathVertex& b) {
-  ++context.rays;
   const Scene& scene = context.scene;
+  if (atInfinity(a) || atInfinity(b)) {
+    if (atInfinity(a) && atInfinity(b)) return false;
+    const PathVertex& finite = atInfinity(a) ? b : a;
+    PathVertex hit;
+    bool escaped;
+    return traceOrEscape(context, finite, directionBetween(finite, atInfinity(a) ? a : b), &hit,
+                         &escaped) &&
+           escaped;
+  }
+  ++context.rays;
   if (!scene.hasMedia()) return scene.visible(a.p, a.n, b.p, b.n);
   std::vector<MediumSegment> segments;
   int arrival;
@@ -130,7 +164,14 @@ bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVe
   float pickPdf;
   const int light = scene.pickLight(uPick, &pickPdf);
   const AreaLight& info = scene.lights()[size_t(light)];
-  if (info.isEnvironment()) return false;
+  if (info.isEnvironment()) {
+    // A direction towards the environment by its importance; the vertex lies along it.
+    float pdf;
+    const Vec3f w = scene.environment()->sample(Vec2f(u[0], u[1]), &pdf);
+    if (!(pdf > 0)) return false;
+    *v = vertexAtInfinity(scene, light, scene.center(), w);
+    return true;
+  }
   *v = PathVertex();
   v->kind = PathVertex::Kind::Light;
   v->light = light;
@@ -141,6 +182,22 @@ bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVe
     scene.sampleLightPoint(light, u, &v->p, &v->n);
     v->ns = v->n;
   }
+  return true;
+}
+
+bool traceFromEnvironment(const MutationContext& context, const PathVertex& x0, const Vec2f& u,
+                          PathVertex* hit) {
+  // As BDPT's light subpaths leave the environment (BidirectionalTracer::traceLightSubpath).
+  const Scene& scene = context.scene;
+  const Vec3f w = -x0.n;  // towards the environment
+  const Vec2f disk = squareToConcentricDisk(u);
+  const Frame frame(w);
+  PathVertex start;
+  start.p = scene.center() + (w + frame.s * disk.x + frame.t * disk.y) * scene.extent();
+  PathVertex v;
+  bool escaped;
+  if (!traceOrEscape(context, start, x0.n, &v, &escaped) || escaped) return false;
+  *hit = v;
   return true;
 }
 

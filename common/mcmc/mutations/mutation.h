@@ -79,6 +79,11 @@ class Mutation {
 // enter only f.
 bool traceVertex(const MutationContext& context, const PathVertex& from, const Vec3f& w,
                  PathVertex* hit);
+// The same, except that a ray leaving a scene with an environment light ends on it, at infinity
+// (*escaped set): how camera subpaths end there, as BDPT's do. Without media only (path-space
+// chains take an environment only in scenes without media).
+bool traceOrEscape(const MutationContext& context, const PathVertex& from, const Vec3f& w,
+                   PathVertex* hit, bool* escaped);
 // The vertex that a flight from `from` in direction w reaches: the first surface, or a vertex
 // in a medium where Medium::sampleFreeFlight lands one in a medium on the way (the flight
 // starting in `medium`, changing medium at null boundaries); the vertex's `medium` is the one
@@ -88,7 +93,8 @@ bool flyVertex(const MutationContext& context, const PathVertex& from, int mediu
 // The medium that a path leaving v in direction w starts in, `around` being the medium around
 // v (on either side of a surface without a medium interface).
 int mediumLeaving(const Scene& scene, const PathVertex& v, const Vec3f& w, int around);
-// Whether the segment between two vertices is unoccluded (null boundaries let it through).
+// Whether the segment between two vertices is unoccluded (null boundaries let it through); with
+// one of them at infinity, whether the ray from the other in its direction leaves the scene.
 // Counts the ray.
 bool connectVertices(const MutationContext& context, const PathVertex& a, const PathVertex& b);
 
@@ -121,9 +127,17 @@ Vec3f tracedDirection(const Scene& scene, const PathVertex& from, const PathVert
 Vec3f aimedDirection(const Scene& scene, const PathVertex& from, const Vec3f& point);
 
 // A light vertex as BDPT starts its light subpaths (Path's densities are BDPT's): light
-// `uPick` picks by power, then a point light's position or a point of an area light by area
-// (u). False for the environment, or a scene without lights.
+// `uPick` picks by power, then a point light's position, a point of an area light by area (u),
+// or the environment's vertex at infinity, its direction by the map's importance (u[0], u[1]).
+// False for a scene without lights.
 bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVertex* v);
+
+// The first vertex of a light subpath from the environment vertex x0: a point of the disk of
+// the bounding sphere's radius that faces x0's direction (u, uniformly: density
+// Scene::environmentDiskDensity), and the surface the ray from it along x0's light hits. False
+// when it misses the scene.
+bool traceFromEnvironment(const MutationContext& context, const PathVertex& x0, const Vec2f& u,
+                          PathVertex* hit);
 
 // Angle between two unit vectors, accurate for small angles.
 double angleBetween(const Vec3f& a, const Vec3f& b);

@@ -90,7 +90,9 @@ void expectPathLengthIntegrals(const std::string& file, int lengths, int proposa
                            });
   });
   // The mutation: from a path of three vertices, the proposals that delete both non-camera
-  // vertices; f / T of each, over all proposals made, by the length regrown.
+  // vertices (through a thin lens: all three, the lens point regrown too); f / T of each, over
+  // all proposals made, by the length regrown.
+  const int keptCamera = scene->camera().hasLens() ? 0 : 1;
   MutationContext context{*scene, maxDepth};
   BidirectionalMutation mutation(context);
   const Path x = findPath(*scene, maxDepth, [](const Path& p) { return p.length() == 2; });
@@ -104,7 +106,7 @@ void expectPathLengthIntegrals(const std::string& file, int lengths, int proposa
       MutationRecord r;
       double v = 0;
       int k = 0;
-      if (mutation.propose(x, rng, &y, &r) && r.keptLight == 0 && r.keptCamera == 1 &&
+      if (mutation.propose(x, rng, &y, &r) && r.keptLight == 0 && r.keptCamera == keptCamera &&
           y.length() <= lengths) {
         PathContribution fy = y.contribution(*scene, maxDepth);
         if (fy.carriesLight()) {
@@ -171,6 +173,21 @@ TEST(BidirectionalMutationDensity, RegrowsPathsFromPointAndTwoSidedLights) {
 // E[f / T] with its free flights' densities in T and the transmittances (marched finely) in f.
 TEST(BidirectionalMutationDensity, RegrowsPathsWithVerticesInMedia) {
   expectPathLengthIntegrals(std::string(FARM_TEST_DATA_DIR) + "/smoke-room/scene.xml", 4, 1 << 21);
+}
+
+// Through a thin lens the mutation can regrow the camera's end from a new lens point, and the
+// whole path so: E[f / T] over those proposals is then BDPT's integral over the lens too
+// (tests/data/thin-lens, with its lens of radius 0.4 across a view of 64 x 32 pixels).
+TEST(BidirectionalMutationDensity, RegrowsPathsThroughAThinLensFromNewLensPoints) {
+  expectPathLengthIntegrals(std::string(FARM_TEST_DATA_DIR) + "/thin-lens/scene.pbrt", 3);
+}
+
+// Under an image sky (tests/data/sky: a floor and two balls, one glossy): light vertices on
+// the environment (a direction by the map's importance, then the disk facing it), camera
+// subpaths that end on it where their rays leave the scene, and edges to it along its
+// direction.
+TEST(BidirectionalMutationDensity, RegrowsPathsFromTheEnvironment) {
+  expectPathLengthIntegrals(std::string(FARM_TEST_DATA_DIR) + "/sky/scene.pbrt", 3, 1 << 22);
 }
 
 // --- The perturbations integrate to one -------------------------------------------------------
