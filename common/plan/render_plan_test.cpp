@@ -185,7 +185,9 @@ TEST(RenderPlan, ALensAnEnvironmentAndMediaAreInAndNarrowTheCandidates) {
   // left out only for want of specular surfaces, not refused.
   for (const std::string& n : lens.notShortlisted) {
     EXPECT_EQ(n.find("thin lens"), std::string::npos) << n;
-    if (n.rfind("mlt: ", 0) == 0) EXPECT_NE(n.find("no specular surfaces"), std::string::npos) << n;
+    if (n.rfind("mlt: ", 0) == 0) {
+      EXPECT_NE(n.find("no specular surfaces"), std::string::npos) << n;
+    }
   }
   SceneDescription lensDesc;
   lensDesc.camera.lensRadius = 0.4f;

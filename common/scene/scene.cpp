@@ -260,6 +260,12 @@ float Scene::offsetFor(const Vec3f& p) const {
   return 1e-5f * (maxAbsComponent(p) + extent_);
 }
 
+Vec3f Scene::environmentDiskPoint(const Vec3f& w, const Vec2f& u) const {
+  const Vec2f disk = squareToConcentricDisk(u);
+  const Frame frame(w);
+  return center_ + (w + frame.s * disk.x + frame.t * disk.y) * extent_;
+}
+
 Ray Scene::spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const {
   Ray r;
   float side = dot(ng, d) >= 0 ? 1.0f : -1.0f;

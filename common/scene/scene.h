@@ -131,6 +131,9 @@ class Scene {
   // their direction, uniformly: this is the disk's area density (pbrt-v3's infinite light emits
   // the same way: a density of directions times one of positions on such a disk).
   float environmentDiskDensity() const { return 1 / (kPi * extent_ * extent_); }
+  // The point of that disk for two uniform numbers, the disk facing unit direction w (towards
+  // the environment) from outside the scene.
+  Vec3f environmentDiskPoint(const Vec3f& w, const Vec2f& u) const;
   // Uniform point on an area light; the area density is 1 / area.
   void sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const;
   // The probability with which sampleLightPoint picks triangle t of a mesh light, as its CDF

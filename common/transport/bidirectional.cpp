@@ -212,10 +212,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
     y.infinite = true;
     y.pdfFwd = pickPdf * pdfDir;
     y.beta = scene_.environment()->radiance(w) / y.pdfFwd;
-    const float radius = scene_.extent();
-    const Vec2f disk = squareToConcentricDisk({uPoint[0], uPoint[1]});
-    const Frame frame(w);
-    y.p = scene_.center() + (w + frame.s * disk.x + frame.t * disk.y) * radius;
+    y.p = scene_.environmentDiskPoint(w, {uPoint[0], uPoint[1]});
     if (maxVertices < 2 || isBlack(y.beta)) return 1;
     const float pdfDisk = scene_.environmentDiskDensity();
     Ray ray;

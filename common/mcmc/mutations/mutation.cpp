@@ -4,7 +4,6 @@
 #include <cmath>
 #include <vector>
 
-#include "common/sampling/warp.h"
 #include "common/scene/scene.h"
 
 namespace farm {
@@ -27,44 +26,51 @@ const char* mutationName(MutationType type) {
   return "?";
 }
 
-bool traceVertex(const MutationContext& context, const PathVertex& from, const Vec3f& w,
-                 PathVertex* hit) {
+namespace {
+
+enum class Traced { Surface, LeftTheScene, Lost };
+
+// The ray from `from` in direction w, through null boundaries: the first surface it meets
+// (*hit), or that it left the scene, or that it crossed too many boundaries to follow.
+Traced traceRay(const MutationContext& context, const PathVertex& from, const Vec3f& w,
+                PathVertex* hit) {
   const Scene& scene = context.scene;
   Ray ray = scene.spawnRay(from.p, from.n, w);
   for (int crossing = 0; crossing < 1024; ++crossing) {
     ++context.rays;
     SurfaceHit h;
-    if (!scene.intersect(ray, &h)) return false;
+    if (!scene.intersect(ray, &h)) return Traced::LeftTheScene;
     if (scene.hasMedia() && scene.isNullBoundary(h.shape)) {
       ray = scene.spawnRay(h.p, h.ng, w);
       continue;
     }
     *hit = surfaceVertex(scene, h);
-    return true;
+    return Traced::Surface;
   }
-  return false;
+  return Traced::Lost;
+}
+
+}  // namespace
+
+bool traceVertex(const MutationContext& context, const PathVertex& from, const Vec3f& w,
+                 PathVertex* hit) {
+  return traceRay(context, from, w, hit) == Traced::Surface;
 }
 
 bool traceOrEscape(const MutationContext& context, const PathVertex& from, const Vec3f& w,
                    PathVertex* hit, bool* escaped) {
   const Scene& scene = context.scene;
   *escaped = false;
-  Ray ray = scene.spawnRay(from.p, from.n, w);
-  for (int crossing = 0; crossing < 1024; ++crossing) {
-    ++context.rays;
-    SurfaceHit h;
-    if (!scene.intersect(ray, &h)) {
+  switch (traceRay(context, from, w, hit)) {
+    case Traced::Surface:
+      return true;
+    case Traced::LeftTheScene:
       if (scene.environmentLight() < 0 || scene.hasMedia()) return false;
       *hit = vertexAtInfinity(scene, scene.environmentLight(), from.p, w);
       *escaped = true;
       return true;
-    }
-    if (scene.hasMedia() && scene.isNullBoundary(h.shape)) {
-      ray = scene.spawnRay(h.p, h.ng, w);
-      continue;
-    }
-    *hit = surfaceVertex(scene, h);
-    return true;
+    case Traced::Lost:
+      break;
   }
   return false;
 }
@@ -188,17 +194,9 @@ bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVe
 bool traceFromEnvironment(const MutationContext& context, const PathVertex& x0, const Vec2f& u,
                           PathVertex* hit) {
   // As BDPT's light subpaths leave the environment (BidirectionalTracer::traceLightSubpath).
-  const Scene& scene = context.scene;
-  const Vec3f w = -x0.n;  // towards the environment
-  const Vec2f disk = squareToConcentricDisk(u);
-  const Frame frame(w);
   PathVertex start;
-  start.p = scene.center() + (w + frame.s * disk.x + frame.t * disk.y) * scene.extent();
-  PathVertex v;
-  bool escaped;
-  if (!traceOrEscape(context, start, x0.n, &v, &escaped) || escaped) return false;
-  *hit = v;
-  return true;
+  start.p = context.scene.environmentDiskPoint(-x0.n, u);
+  return traceVertex(context, start, x0.n, hit);
 }
 
 double angleBetween(const Vec3f& a, const Vec3f& b) {
