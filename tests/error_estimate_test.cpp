@@ -1,6 +1,7 @@
 // The error a job reports without a reference (batch means over its chain groups,
 // common/film/batch_means.h) against the error measured with one, on the shared scenes whose
-// references every algorithm converges to: within a factor of two, every algorithm. (On
+// references every algorithm converges to (cornell-box, veach-bidir, veach-mis, veach-ajar):
+// within a factor of two, every algorithm. (On
 // water-caustic every local sampler misses a third of the light: its error against the
 // reference is that deficit, which no group sees; README, "Error without a reference".)
 #include <gtest/gtest.h>
@@ -13,10 +14,30 @@ namespace farm {
 namespace {
 
 struct Case {
-  const char* scene;
+  const char* scene;  // under ../shared/scenes
   Algorithm algorithm;
   int64_t budget;  // samples or seeds per pixel (pt, bdpt, erpt), mutations otherwise
 };
+
+// The reference and its size: ../shared/references' where there is one; veach-ajar's is this
+// renderer's BDPT at 3590 samples a pixel (tests/data/README.md), whose own noise is about
+// 1/3590 of a sample's, far below these renders' of 2-16.
+struct Target {
+  std::string scene, reference;
+  int width, height;
+};
+
+Target targetOf(const std::string& name) {
+  const std::string shared = FARM_SHARED_DIR;
+  if (name == "veach-ajar")
+    return {shared + "/scenes/veach-ajar/scene.pbrt",
+            std::string(FARM_TEST_DATA_DIR) + "/veach-ajar-bdpt-256.exr", 256, 144};
+  if (name == "veach-mis")
+    return {shared + "/scenes/veach-mis/scene.xml", shared + "/references/veach-mis-320.exr", 320,
+            180};
+  return {shared + "/scenes/" + name + "/scene.xml", shared + "/references/" + name + "-256.exr",
+          256, 256};
+}
 
 class ErrorEstimate : public ::testing::TestWithParam<Case> {};
 
@@ -24,13 +45,14 @@ TEST_P(ErrorEstimate, IsWithinAFactorOfTwoOfTheReferencesError) {
   const Case& c = GetParam();
   EmbeddedRenderOptions o;
   o.settings.algorithm = c.algorithm;
-  o.settings.width = 256;
-  o.settings.height = 256;
+  const Target t = targetOf(c.scene);
+  o.settings.width = t.width;
+  o.settings.height = t.height;
   o.settings.samplesPerPixel = c.budget;
   o.settings.mutationsPerPixel = c.budget;
   o.settings.seed = 11;
-  o.scenePath = std::string(FARM_SHARED_DIR) + "/scenes/" + c.scene + "/scene.xml";
-  o.referencePath = std::string(FARM_SHARED_DIR) + "/references/" + c.scene + "-256.exr";
+  o.scenePath = t.scene;
+  o.referencePath = t.reference;
   o.threads = 2;
   EmbeddedRenderResult result;
   const Status s = renderEmbedded(o, &result);
@@ -61,7 +83,9 @@ TEST_P(ErrorEstimate, IsWithinAFactorOfTwoOfTheReferencesError) {
       << "the first estimate came after " << first->samples << " of " << result.progress.workDone;
 }
 
-// Budgets of one to five seconds on two threads; erpt at 2 seeds per pixel has two groups.
+// Budgets of one to seven seconds on two threads; erpt at 2 seeds per pixel has two groups.
+// Measured at seed 11 (estimate / measured): 0.91-0.995 on cornell-box, 0.75-1.25 on
+// veach-bidir, 0.89-1.32 on veach-mis, 0.72-1.27 on veach-ajar.
 INSTANTIATE_TEST_SUITE_P(
     SharedScenes, ErrorEstimate,
     ::testing::Values(
@@ -72,7 +96,15 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"veach-bidir", Algorithm::PathTracing, 16},
         Case{"veach-bidir", Algorithm::Bidirectional, 4}, Case{"veach-bidir", Algorithm::PSSMLT, 8},
         Case{"veach-bidir", Algorithm::PSSMLTOverPT, 16}, Case{"veach-bidir", Algorithm::MMLT, 16},
-        Case{"veach-bidir", Algorithm::MLT, 16}, Case{"veach-bidir", Algorithm::ERPT, 2}),
+        Case{"veach-bidir", Algorithm::MLT, 16}, Case{"veach-bidir", Algorithm::ERPT, 2},
+        Case{"veach-mis", Algorithm::PathTracing, 16},
+        Case{"veach-mis", Algorithm::Bidirectional, 4}, Case{"veach-mis", Algorithm::PSSMLT, 8},
+        Case{"veach-mis", Algorithm::PSSMLTOverPT, 16}, Case{"veach-mis", Algorithm::MMLT, 16},
+        Case{"veach-mis", Algorithm::MLT, 16}, Case{"veach-mis", Algorithm::ERPT, 2},
+        Case{"veach-ajar", Algorithm::PathTracing, 16},
+        Case{"veach-ajar", Algorithm::Bidirectional, 4}, Case{"veach-ajar", Algorithm::PSSMLT, 8},
+        Case{"veach-ajar", Algorithm::PSSMLTOverPT, 16}, Case{"veach-ajar", Algorithm::MMLT, 16},
+        Case{"veach-ajar", Algorithm::MLT, 16}, Case{"veach-ajar", Algorithm::ERPT, 2}),
     [](const auto& info) {
       std::string name = std::string(info.param.scene) + "_" + algorithmName(info.param.algorithm);
       for (char& ch : name)

@@ -10,12 +10,18 @@
 // per channel value. A normalization constant Z that scales every group alike (the bootstrap's)
 // moves them together, out of the spread's sight: its relative variance adds x^2 Var(Z)/Z^2.
 // The relative MSE is then estimated as common/film/error_metrics.h measures it against a
-// reference, mean of Var(x) / (r^2 + 0.01), with the median m of the groups' values in place of
-// the reference r: the image x itself would put a firefly of one group into the denominator
-// that should weigh it (x^2 grows as fast as the spread, and a pixel's share stays near 1
-// whatever the firefly, where the reference's grows with it). Measured on cornell-box and
-// veach-bidir, every algorithm, 4 s: within 0.95-1.5 of the reference's relative MSE with m,
-// 0.10-0.98 with x.
+// reference, mean of Var(x) / (r^2 + 0.01), with r^2 estimated without the reference: products
+// of different groups' values (E[x_g x_h] = r^2 for g != h), averaged over the pixel's
+// neighbours without the pixel itself (batch_means.cpp says why: a pixel alone cannot tell its
+// firefly from its rare bright samples). Measured against the references at 2-6 s a render
+// (every algorithm; cornell-box, veach-bidir, veach-mis, veach-ajar): 0.65-1.30 of the
+// reference's relative MSE, where the groups' median gave 0.28-23 (veach-ajar and veach-mis
+// at few samples a pixel) and the image itself 0.3-1. Its limit: light that one group alone
+// has found over a patch wider than the window. A firefly blob over darkness (erpt with two
+// groups: r^2 estimated as blob x background, far above the truth) and a bright patch only one
+// group's chains reached (r^2 estimated near 0) look alike to it; at seeds 12 and 13, 4 of 42
+// such renders fell outside a factor of two (0.04, 0.23, 0.30 and 14). The numerator was right
+// in each: with the reference's r^2 in the denominator, 0.92-1.20 of the measured error.
 // What the spread cannot see: bias (an algorithm that misses light misses it in every group)
 // and light no group has found yet: on water-caustic, where every local sampler misses a third
 // of the light, it sees the noise and not the deficit.

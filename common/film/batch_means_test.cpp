@@ -17,15 +17,20 @@ struct Drawn {
   double expectedRelMse = 0;  // E[(mean - truth)^2 / (truth^2 + 0.01)], averaged
 };
 
-// G groups of unequal work around a random image: group g's values have variance
-// sigma^2 truth^2 / W_g (a relative noise), so their work-weighted mean has sigma^2 truth^2 / W.
+// G groups of unequal work around a smooth image (0.5 .. 3.5, waves of about 100 pixels, as a
+// render's shading varies; the estimate takes r^2 from a pixel's neighbours): group g's values
+// have variance sigma^2 truth^2 / W_g (a relative noise), so their work-weighted mean has
+// sigma^2 truth^2 / W.
 Drawn draw(const std::vector<double>& work, double sigma, uint32_t seed) {
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> value(0.05, 4.0);
   std::normal_distribution<double> normal;
   const int w = 200, h = 100;
   Image truth(w, h);
-  for (float& v : truth.rgb) v = float(value(rng));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c)
+        truth.rgb[(size_t(y) * w + x) * 3 + c] =
+            float(2.0 + 1.5 * std::sin(x / 20.0 + c) * std::cos(y / 15.0 + 2 * c));
   Drawn d;
   d.work = work;
   double total = 0;
@@ -48,17 +53,17 @@ Drawn draw(const std::vector<double>& work, double sigma, uint32_t seed) {
 
 TEST(BatchMeans, EstimatesTheRelativeMseOfGroupsOfUnequalWork) {
   // 60000 channel values, three degrees of freedom each: the estimate's own relative error is
-  // about sqrt(2 / 3 / 60000) = 0.3%. The groups' median in place of the truth in the
-  // denominator biases it by E[1 / (1 + e)^2] - 1 = 3 Var(e) for a relative error e of the
-  // median: about 1% at the equal groups' (the median of four of relative variance 0.1^2 has
-  // about 0.3 of it).
+  // about sqrt(2 / 3 / 60000) = 0.3%. The neighbours' r^2 in place of the pixel's biases it by
+  // how r^2 bends within the window: -1.7% on this image (the truth's own r^2 / (r^2 + 0.01)
+  // over its neighbours' mean, computed apart); the pairs' noise in that mean adds +0.02%.
+  // Hence 3%.
   for (const std::vector<double>& work :
        {std::vector<double>{1, 1, 1, 1}, std::vector<double>{1, 2, 3, 10}}) {
     Drawn d = draw(work, 0.1, 7);
     ErrorEstimate e;
     std::string error;
     ASSERT_TRUE(estimateError(d.groups, d.work, d.mean, 0, &e, &error)) << error;
-    EXPECT_NEAR(e.relMse, d.expectedRelMse, 0.02 * d.expectedRelMse) << work[3];
+    EXPECT_NEAR(e.relMse, d.expectedRelMse, 0.03 * d.expectedRelMse) << work[3];
     EXPECT_GT(e.rmse, 0);
   }
 }
@@ -81,16 +86,44 @@ TEST(BatchMeans, AFireflyOfOneGroupWeighsAsItDoesAgainstTheReference) {
   EXPECT_NEAR(e.relMse, reference, 0.02 * reference);
 }
 
+TEST(BatchMeans, LightInRareBrightSamplesWeighsAsItDoesAgainstTheReference) {
+  // Every pixel's light arrives in rare samples: each of n = 4 samples a group is 1 / p with
+  // probability p = 0.1, else 0, so r = 1 everywhere and the mean of G = 4 groups has variance
+  // (1 / p - 1) / (G n) = 0.5625, relative MSE 0.5625 / 1.01. A pixel's groups mostly see
+  // less than r (66% of groups see nothing): their median, or the pixel's own products, put a
+  // denominator near 0.01 and the estimate some 40x too high. The neighbours' mean of the
+  // pairs' r^2 has relative variance about 3.1 / 80 (the U-statistic's over G = 4 groups of
+  // relative variance 2.25, then 80 neighbours), which biases 1 / (r^2 + 0.01) by about
+  // +3.9%; the estimate's own relative error over 60000 values is under 1%.
+  std::mt19937_64 rng(5);
+  std::binomial_distribution<int> hits(4, 0.1);
+  const int w = 200, h = 100;
+  std::vector<Image> groups(4, Image(w, h));
+  Image mean(w, h);
+  for (Image& g : groups)
+    for (size_t i = 0; i < g.rgb.size(); ++i) {
+      g.rgb[i] = float(hits(rng) / 0.4);
+      mean.rgb[i] += 0.25f * g.rgb[i];
+    }
+  ErrorEstimate e;
+  ASSERT_TRUE(estimateError(groups, {1, 1, 1, 1}, mean, 0, &e, nullptr));
+  const double expected = 0.5625 / 1.01;
+  EXPECT_GT(e.relMse, 0.99 * expected);
+  EXPECT_LT(e.relMse, 1.08 * expected);
+}
+
 TEST(BatchMeans, AddsTheSharedNormalizationsVariance) {
-  // Groups that agree exactly: only Z's error is left, x^2 Var(Z)/Z^2 / (x^2 + 0.01) a value.
-  Image image(2, 1);
-  image.rgb = {1, 2, 0.1f, 0, 3, 1};
+  // Groups that agree exactly: only Z's error is left, x^2 Var(Z)/Z^2 / (r^2 + 0.01) a value,
+  // with r^2 its neighbours' (every pixel alike here, so its own).
+  Image image(3, 2);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 3; ++x) image.set(x, y, {1, 2, 0.1f});
   std::vector<Image> groups(3, image);
   ErrorEstimate e;
   ASSERT_TRUE(estimateError(groups, {1, 2, 3}, image, 0.01, &e, nullptr));
   double expected = 0;
-  for (float x : image.rgb) expected += 0.01 * x * x / (double(x) * x + 1e-2);
-  EXPECT_NEAR(e.relMse, expected / 6, 1e-9);
+  for (double x : {1.0, 2.0, double(0.1f)}) expected += 0.01 * x * x / (x * x + 1e-2);
+  EXPECT_NEAR(e.relMse, expected / 3, 1e-6);
   ASSERT_TRUE(estimateError(groups, {1, 2, 3}, image, 0, &e, nullptr));
   EXPECT_EQ(e.relMse, 0);
 }
