@@ -1,10 +1,12 @@
 #pragma once
 // Test code only: whether two estimators of the same image agree, each rendered twice with
-// different seeds (the statistical tests of thin_lens_test and environment_test), and one
+// different seeds, and their means over more renders (the statistical tests of thin_lens_test
+// and environment_test), and one
 // image's mean and its standard error from the spread of its pixels (furnace_test).
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <vector>
 
 #include "common/film/image.h"
 
@@ -33,6 +35,35 @@ inline Agreement compare(const Image (&a)[2], const Image (&b)[2], double zRel =
   g.meanB = sum[1] / double(n);
   g.se = std::hypot(std::sqrt(var) / double(n), g.meanB * zRel);
   g.ratio = squared / var;
+  return g;
+}
+
+// Two estimators of the same image, each rendered independently several times (different
+// seeds, each render with its own bootstrap): the image means' averages and their standard
+// errors from the spread of the renders' means. Unlike compare()'s pixel-wise error, this holds
+// for estimators whose pixels are correlated (a chain's, ERPT's deposits around a seed, a Z
+// that scales a whole render): every source of a render's error is in its mean's spread.
+struct MeanAgreement {
+  double meanA = 0, meanB = 0, seA = 0, seB = 0;
+  double se() const { return std::hypot(seA, seB); }
+};
+inline MeanAgreement compareMeans(const std::vector<Image>& a, const std::vector<Image>& b) {
+  auto stats = [](const std::vector<Image>& renders, double* mean, double* se) {
+    double s = 0, s2 = 0;
+    for (const Image& img : renders) {
+      double m = 0;
+      for (float v : img.rgb) m += v;
+      m /= double(img.rgb.size());
+      s += m;
+      s2 += m * m;
+    }
+    const double k = double(renders.size());
+    *mean = s / k;
+    *se = k > 1 ? std::sqrt(std::max(0.0, (s2 - k * *mean * *mean) / (k - 1)) / k) : INFINITY;
+  };
+  MeanAgreement g;
+  stats(a, &g.meanA, &g.seA);
+  stats(b, &g.meanB, &g.seB);
   return g;
 }
 
