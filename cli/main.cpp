@@ -63,7 +63,7 @@ struct RenderOptions {
   int erptLength = farm::RenderSettings().erptLength;
   int mediumSamples = farm::RenderSettings().mediumSamples;
   int mediumMarch = farm::RenderSettings().mediumMarchSteps;
-  int chains = 64;
+  int chains = 0;
   int64_t bootstrapCandidates = 0;
   int64_t flushEvery = 0;
   double untilError = 0;
@@ -122,8 +122,10 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       ->add_option("--chains", o->chains,
                    "independent Markov chains (pssmlt, pssmlt-pt, mmlt, mlt), each seeded by the "
                    "bootstrap, or work units (pt, bdpt): more chains cover the image more evenly "
-                   "where chains hardly leave the kind of path they start on")
-      ->default_str("64");
+                   "where chains hardly leave the kind of path they start on; 0: the plan's, 64 "
+                   "or, for mlt where light arrives along specular-diffuse-specular paths, 1024 "
+                   "(`farm plan` says which)")
+      ->default_str("0");
   command
       ->add_option("--bootstrap-candidates", o->bootstrapCandidates,
                    "candidate paths of the bootstrap that estimates Z and draws the chains' seeds "
@@ -234,8 +236,8 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
   s->erptLength = o.erptLength;
   s->mediumSamples = o.mediumSamples;
   s->mediumMarchSteps = o.mediumMarch;
-  if (o.chains < 1 || o.chains > (1 << 20)) {
-    *error = "--chains must be between 1 and 1048576, not " + std::to_string(o.chains);
+  if (o.chains < 0 || o.chains > (1 << 20)) {
+    *error = "--chains must be between 0 (the plan's) and 1048576, not " + std::to_string(o.chains);
     return false;
   }
   s->numChains = o.chains;
@@ -594,7 +596,7 @@ int runPlan(const std::string& scenePath, const std::string& algorithm,
       plan = farm::planJob(scene, &settings);
     } else {
       plan = farm::planRender(farm::analyseScene(*scene), settings.algorithm,
-                              settings.autoAlgorithm, settings.mutationMix);
+                              settings.autoAlgorithm, settings.mutationMix, settings.numChains);
     }
   } catch (const std::exception& e) {
     return fail(e.what());

@@ -149,8 +149,8 @@ Algorithm pilotPick(Algorithm first, const std::vector<PilotFigure>& figures) {
 RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
                    const std::function<bool()>& keepGoing) {
   const SceneAnalysis analysis = analyseScene(*scene);
-  RenderPlan plan =
-      planRender(analysis, settings->algorithm, settings->autoAlgorithm, settings->mutationMix);
+  RenderPlan plan = planRender(analysis, settings->algorithm, settings->autoAlgorithm,
+                               settings->mutationMix, settings->numChains);
   if (settings->autoAlgorithm) {
     if (plan.shortlist.empty())
       throw std::runtime_error("no algorithm of this build can render this scene");
@@ -188,8 +188,10 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
     plan.applied = false;
     plan.mutationMix = settings->mutationMix;
     plan.choose(plan.algorithm);
+    plan.chains = 0;
   } else {
     settings->mutationMix = plan.mutationMix;
+    if (plan.chains > 0) settings->numChains = plan.chains;
   }
   return plan;
 }

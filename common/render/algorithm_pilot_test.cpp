@@ -67,6 +67,44 @@ TEST(PlanJob, AutoTakesTheOnlyCandidateWithoutAPilot) {
   EXPECT_EQ(settings.mutationMix, MutationMix());
 }
 
+// mlt under specular-diffuse-specular light gets the plan's chain count unless the settings
+// name one, and keeps its own with --no-plan; no other algorithm or scene is touched.
+TEST(PlanJob, MltUnderSpecularDiffuseSpecularLightTakesThePlansChains) {
+  std::shared_ptr<Scene> water = load(kShared + "/scenes/water-caustic/scene.xml", 32);
+  RenderSettings settings;
+  settings.algorithm = Algorithm::MLT;
+  settings.width = settings.height = 32;
+  RenderSettings asked = settings, kept = settings, pssmlt = settings;
+  asked.numChains = 256;
+  kept.ignorePlan = true;
+  pssmlt.algorithm = Algorithm::PSSMLT;
+  const RenderPlan plan = planJob(water, &settings);
+  EXPECT_EQ(settings.numChains, kSdsChains);
+  EXPECT_EQ(plan.chains, kSdsChains);
+  bool named = false;
+  for (const std::string& line : plan.describe())
+    named |= line.rfind("chains: " + std::to_string(kSdsChains) + " (specular-diffuse", 0) == 0;
+  EXPECT_TRUE(named) << "the plan names the chains and why";
+  const RenderPlan requested = planJob(water, &asked);
+  EXPECT_EQ(asked.numChains, 256);
+  EXPECT_EQ(requested.chains, 256);
+  EXPECT_NE(requested.chainsReason.find("requested"), std::string::npos);
+  planJob(water, &kept);
+  EXPECT_EQ(kept.numChains, 0) << "--no-plan keeps the default";
+  planJob(water, &pssmlt);
+  EXPECT_EQ(pssmlt.numChains, 0);
+  RenderSettings cornell = kept;
+  cornell.ignorePlan = false;
+  const RenderPlan other = planJob(load(kShared + "/scenes/cornell-box/scene.xml", 32), &cornell);
+  EXPECT_EQ(cornell.numChains, 0);
+  EXPECT_EQ(other.chains, 0);
+  // And the job seeds that many chains.
+  settings.mutationsPerPixel = 2;
+  settings.bootstrapSamples = 1 << 12;
+  RenderJob job(water, settings, "water");
+  EXPECT_EQ(job.planChains(job.bootstrap()).size(), size_t(kSdsChains));
+}
+
 // On veach-bidir, whose light comes mostly through a lamp's small bulb, path tracing's error
 // is tens of times bidirectional path tracing's (README, "The plan"): a pilot of half a second
 // each ranks bdpt first, and says so with its figures.
