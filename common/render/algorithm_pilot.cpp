@@ -193,6 +193,8 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
     settings->mutationMix = plan.mutationMix;
     if (plan.chains > 0) settings->numChains = plan.chains;
   }
+  // The planned settings name the count the job runs, for its report and a restart.
+  if (settings->numChains == 0) settings->numChains = kDefaultChains;
   return plan;
 }
 

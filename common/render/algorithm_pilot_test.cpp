@@ -74,7 +74,7 @@ TEST(PlanJob, MltUnderSpecularDiffuseSpecularLightTakesThePlansChains) {
   RenderSettings settings;
   settings.algorithm = Algorithm::MLT;
   settings.width = settings.height = 32;
-  RenderSettings asked = settings, kept = settings, pssmlt = settings;
+  RenderSettings asked = settings, kept = settings, pssmlt = settings, cornell = settings;
   asked.numChains = 256;
   kept.ignorePlan = true;
   pssmlt.algorithm = Algorithm::PSSMLT;
@@ -90,13 +90,11 @@ TEST(PlanJob, MltUnderSpecularDiffuseSpecularLightTakesThePlansChains) {
   EXPECT_EQ(requested.chains, 256);
   EXPECT_NE(requested.chainsReason.find("requested"), std::string::npos);
   planJob(water, &kept);
-  EXPECT_EQ(kept.numChains, 0) << "--no-plan keeps the default";
+  EXPECT_EQ(kept.numChains, kDefaultChains) << "--no-plan keeps the default";
   planJob(water, &pssmlt);
-  EXPECT_EQ(pssmlt.numChains, 0);
-  RenderSettings cornell = kept;
-  cornell.ignorePlan = false;
+  EXPECT_EQ(pssmlt.numChains, kDefaultChains);
   const RenderPlan other = planJob(load(kShared + "/scenes/cornell-box/scene.xml", 32), &cornell);
-  EXPECT_EQ(cornell.numChains, 0);
+  EXPECT_EQ(cornell.numChains, kDefaultChains);
   EXPECT_EQ(other.chains, 0);
   // And the job seeds that many chains.
   settings.mutationsPerPixel = 2;

@@ -30,7 +30,6 @@ namespace {
 // for a report.
 const TransmittanceEstimator kSeedEstimate{nullptr, 1, 64};
 
-constexpr int kDefaultChains = 64;
 constexpr uint64_t kSampleDomain = 0x5a3b;
 constexpr uint64_t kPathSeedDomain = 0x9a7b;
 // Time-budgeted sample chains draw from disjoint index ranges this far apart.

@@ -55,6 +55,10 @@ using ProgressCallback = std::function<bool(const Progress&)>;
 // coordinator.
 constexpr int kErrorGroups = 4;
 
+// Chains (or work units) of a job whose settings name none (RenderSettings::numChains 0) and
+// whose plan sets none (render_plan.h, kSdsChains).
+constexpr int kDefaultChains = 64;
+
 class RenderJob {
  public:
   RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings, std::string jobId);
