@@ -92,7 +92,7 @@ bool estimateError(const std::vector<Image>& groups, const std::vector<double>& 
   // pixel: 5-23x its measured error with the median). Its neighbours' light is r^2's with the
   // rare samples averaged out, and leaving the pixel out keeps its own firefly out of the
   // denominator that should weigh it. The cost is where r^2 bends within the window: a
-  // smooth image's dark troughs take their brighter neighbours' r^2 (about -5% on the test's
+  // smooth image's dark troughs take their brighter neighbours' r^2 (-1.7% on the unit test's
   // image, batch_means_test.cpp).
   const std::vector<double> neighbours = neighbourMean(square, image.width, image.height);
   double sumRel = 0, sumSq = 0;

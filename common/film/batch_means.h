@@ -14,7 +14,7 @@
 // of different groups' values (E[x_g x_h] = r^2 for g != h), averaged over the pixel's
 // neighbours without the pixel itself (batch_means.cpp says why: a pixel alone cannot tell its
 // firefly from its rare bright samples). Measured against the references at 2-6 s a render
-// (every algorithm; cornell-box, veach-bidir, veach-mis, veach-ajar): 0.65-1.30 of the
+// (every algorithm; cornell-box, veach-bidir, veach-mis, veach-ajar; seed 11): 0.72-1.32 of the
 // reference's relative MSE, where the groups' median gave 0.28-23 (veach-ajar and veach-mis
 // at few samples a pixel) and the image itself 0.3-1. Its limit: light that one group alone
 // has found over a patch wider than the window. A firefly blob over darkness (erpt with two
