@@ -58,9 +58,10 @@ bool estimateError(const std::vector<Image>& groups, const std::vector<double>& 
   }
   const size_t count = image.rgb.size();
   if (count == 0) return fail("an empty image");
+  if (count != size_t(image.width) * size_t(image.height) * 3)
+    return fail("the image's values do not fill its width and height");
   for (const Image& g : groups) {
-    if (g.width != image.width || g.height != image.height || g.rgb.size() != count ||
-        count != size_t(image.width) * size_t(image.height) * 3)
+    if (g.width != image.width || g.height != image.height || g.rgb.size() != count)
       return fail("the groups' images differ in size from the image");
   }
   const double zRel = std::isfinite(zRelativeVariance) ? std::max(0.0, zRelativeVariance) : 0.0;

@@ -3,9 +3,13 @@
 // different seeds, and their means over more renders (the statistical tests of thin_lens_test
 // and environment_test), and one
 // image's mean and its standard error from the spread of its pixels (furnace_test).
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "common/film/image.h"
@@ -65,6 +69,24 @@ inline MeanAgreement compareMeans(const std::vector<Image>& a, const std::vector
   stats(a, &g.meanA, &g.seA);
   stats(b, &g.meanB, &g.seB);
   return g;
+}
+
+// A chain's renders against path tracing's (`what` names them in the output): their means within
+// 4 standard errors of compareMeans() (with 15 or more degrees of freedom per side, |t| > 4 has
+// probability 0.1% or less), and the first two renders' squared differences explained by their
+// variance, pixel by pixel (compare()).
+inline void expectRendersAgree(const std::string& what, const std::vector<Image>& pt,
+                               const std::vector<Image>& chain) {
+  const MeanAgreement m = compareMeans(pt, chain);
+  EXPECT_NEAR(m.meanA, m.meanB, 4 * m.se()) << what;
+  const Image firstPt[2] = {pt[0], pt[1]}, firstChain[2] = {chain[0], chain[1]};
+  const Agreement g = compare(firstPt, firstChain);
+  EXPECT_LT(g.ratio, 1.5) << what;
+  std::printf(
+      "%s: means pt %.5f +- %.5f, chain %.5f +- %.5f (%zu and %zu renders, %.2f standard errors "
+      "apart); squared differences over variance %.3f\n",
+      what.c_str(), m.meanA, m.seA, m.meanB, m.seB, pt.size(), chain.size(),
+      (m.meanB - m.meanA) / m.se(), g.ratio);
 }
 
 // The mean of each channel over the image, and its standard error taken from the pixels'

@@ -10,7 +10,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/mcmc/primary_sample_integrand.h"
@@ -111,16 +113,12 @@ TEST(ThinLens, LightTracingThroughTheLensAgreesWithNextEventEstimation) {
 
 // The primary-sample chains over BDPT and over PT, and multiplexed MLT, reach the lens through
 // their tracers' two extra camera numbers, path-space MLT and ERPT through their paths' camera
-// vertices: their images against path tracing. The image means over kRenders independent
-// renders each agree within 4 standard errors taken from the spread of the renders' means,
-// which holds whatever correlates a render's pixels (a chain's path, ERPT's deposits around a
-// seed, the Z that scales the whole render): with 15 degrees of freedom per side, |t| > 4 has
-// probability 0.1%. The first two renders' squared differences are explained by their
-// variance, pixel by pixel.
+// vertices: their images against path tracing over kRenders independent renders each
+// (expectRendersAgree: the means' error from the renders' spread holds whatever correlates a
+// render's pixels: a chain's path, ERPT's deposits around a seed, the Z that scales it).
 constexpr int kRenders = 16;
 
-LocalRenderResult renderChain(Algorithm algorithm, int64_t mpp, uint64_t seed,
-                              const std::string& file) {
+Image renderChain(Algorithm algorithm, int64_t mpp, uint64_t seed, const std::string& file) {
   RenderSettings s;
   s.algorithm = algorithm;
   s.mutationsPerPixel = mpp;
@@ -134,26 +132,26 @@ LocalRenderResult renderChain(Algorithm algorithm, int64_t mpp, uint64_t seed,
   auto scene = loadScene(file, s);
   EXPECT_TRUE(scene->camera().hasLens());
   RenderJob job(scene, s, "thin-lens");
-  return renderLocally(job);
+  return renderLocally(job).image;
+}
+
+// Path tracing's kRenders renders of a scene file at `spp`, rendered once for every test that
+// compares with them.
+const std::vector<Image>& pathTraced(const std::string& file, int64_t spp) {
+  static std::map<std::pair<std::string, int64_t>, std::vector<Image>> renders;
+  std::vector<Image>& r = renders[{file, spp}];
+  for (int k = int(r.size()); k < kRenders; ++k)
+    r.push_back(render(Algorithm::PathTracing, spp, 21 + 2 * uint64_t(k), -1, file));
+  return r;
 }
 
 void expectChainAgreesWithPathTracing(Algorithm algorithm, int64_t mpp,
                                       const std::string& file = kScene, int64_t ptSpp = 64) {
-  std::vector<Image> pt, chain;
-  for (int k = 0; k < kRenders; ++k) {
-    pt.push_back(render(Algorithm::PathTracing, ptSpp, 21 + 2 * uint64_t(k), -1, file));
-    chain.push_back(renderChain(algorithm, mpp, 31 + uint64_t(k), file).image);
-  }
-  const MeanAgreement m = compareMeans(pt, chain);
-  EXPECT_NEAR(m.meanA, m.meanB, 4 * m.se()) << algorithmName(algorithm);
-  const Image firstPt[2] = {pt[0], pt[1]}, firstChain[2] = {chain[0], chain[1]};
-  const Agreement g = compare(firstPt, firstChain);
-  EXPECT_LT(g.ratio, 1.5) << algorithmName(algorithm);
-  std::printf(
-      "thin lens %s: means pt %.5f +- %.5f, chain %.5f +- %.5f (%d renders each, %.2f standard "
-      "errors apart); squared differences over variance %.3f\n",
-      algorithmName(algorithm), m.meanA, m.seA, m.meanB, m.seB, kRenders,
-      (m.meanB - m.meanA) / m.se(), g.ratio);
+  std::vector<Image> chain;
+  for (int k = 0; k < kRenders; ++k)
+    chain.push_back(renderChain(algorithm, mpp, 31 + uint64_t(k), file));
+  expectRendersAgree(std::string("thin lens ") + algorithmName(algorithm), pathTraced(file, ptSpp),
+                     chain);
 }
 
 TEST(ThinLens, PssmltAgreesWithPathTracing) {
