@@ -109,14 +109,15 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
       ->default_str("100");
   command
       ->add_option("--medium-samples", o->mediumSamples,
-                   "mlt through density grids: ratio-tracking estimates averaged into each "
-                   "transmittance of f (pseudo-marginal MLT: exact for any count; more give "
-                   "fewer rejections at their cost)")
+                   "mlt and erpt through density grids: ratio-tracking estimates averaged into "
+                   "each transmittance of f (pseudo-marginal MLT: exact for any count; more "
+                   "give fewer rejections at their cost)")
       ->default_str("1");
   command
-      ->add_option("--medium-march", o->mediumMarch,
-                   "mlt through density grids: march each transmittance with this many steps "
-                   "instead (deterministic, biased by the step); 0: estimate")
+      ->add_option(
+          "--medium-march", o->mediumMarch,
+          "mlt and erpt through density grids: march each transmittance with this many steps "
+          "instead (deterministic, biased by the step); 0: estimate")
       ->default_str("0");
   command
       ->add_option("--chains", o->chains,

@@ -1,10 +1,12 @@
 #include "common/mcmc/erpt.h"
 
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "common/chain/chain_flusher.h"
+#include "common/mcmc/erpt_grid_seeds.h"
 #include "common/mcmc/mlt_chain.h"
 #include "common/transport/path_tracer.h"
 
@@ -30,8 +32,13 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
     throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
                              ": its first seed must start a pass over the tile");
   MutationMix perturbations{0, 0, 1, 1, 0};  // Cline et al.: lens and caustic perturbations
-  PathChain chain(scene, spec.maxDepth, perturbations);
+  PathChain chain(scene, spec.maxDepth, perturbations, spec.mediumSamples, spec.mediumMarchSteps);
   PathTracer tracer(scene, spec.maxDepth);
+  std::unique_ptr<GridSeedSampler> gridSeeds;
+  if (hasDensityGrid(scene)) {
+    gridSeeds = std::make_unique<GridSeedSampler>(scene, spec.maxDepth, spec.mediumSamples,
+                                                  spec.mediumMarchSteps);
+  }
   ChainFlusher flusher(spec, scene, onFlush, cancel);
   SplatBuffer& film = flusher.film();
   const double length = spec.erptLength;
@@ -60,18 +67,22 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
           std::min(rng.nextFloat() * camera.height(),
                    std::nextafter(float(camera.height()), 0.0f)));
     }
-    IndependentSampler sampler(&rng);
-    tracer.visitPaths(seedFilm, sampler, [&](const PathTracer::TracedPath& seed) {
-      if (!flusher.check(seed.value)) return;
-      const double energy = luminance(seed.value);
+    // A seed path x whose chains start at (x, fx): fx the chain's own estimate of f(x) through
+    // grids (erpt_grid_seeds.h), or f(x) itself, which start() evaluates, elsewhere.
+    auto redistribute = [&](const Path& x, const PathContribution* fx, const Vec2f& at,
+                            const Spectrum& value) {
+      if (!flusher.check(value)) return;
+      const double energy = luminance(value);
       if (!(energy > 0)) return;
-      x.vertices.clear();
-      if (seed.light) x.vertices.push_back(*seed.light);
-      x.vertices.insert(x.vertices.end(), seed.camera, seed.camera + seed.count);
-      if (!chain.start(x, rng)) {
+      auto start = [&] {
+        if (!fx) return chain.start(x, rng);
+        chain.resume(x, *fx);
+        return true;
+      };
+      if (!start()) {
         // A path the chains cannot evaluate (a lobe at the edge of rounding): its energy
         // stays where path tracing put it.
-        film.add(seedFilm, seed.value);
+        film.add(at, value);
         return;
       }
       const double expectedChains = energy / (length * spec.erptDeposit);
@@ -85,12 +96,25 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
         deposit = energy / (length * kMaxErptChains);
       }
       for (int c = 0; c < chains; ++c) {
-        if (c > 0) chain.start(x, rng);  // the first starts where the check above left it
+        if (c > 0) start();  // the first starts where the check above left it
         for (int i = 0; i < spec.erptLength; ++i) chain.step(rng, film, float(deposit), &flusher);
       }
-    });
+    };
+    if (gridSeeds) {
+      gridSeeds->visit(seedFilm, rng, [&](const GridSeed& seed) {
+        redistribute(*seed.path, &seed.f, seed.f.film, seed.f.color * float(seed.energy));
+      });
+    } else {
+      IndependentSampler sampler(&rng);
+      tracer.visitPaths(seedFilm, sampler, [&](const PathTracer::TracedPath& seed) {
+        x.vertices.clear();
+        if (seed.light) x.vertices.push_back(*seed.light);
+        x.vertices.insert(x.vertices.end(), seed.camera, seed.camera + seed.count);
+        redistribute(x, nullptr, seedFilm, seed.value);
+      });
+    }
     const int64_t doneAfter = k + 1;
-    if (!flusher.countMutation(tracer.rays() + chain.rays(),
+    if (!flusher.countMutation(tracer.rays() + chain.rays() + (gridSeeds ? gridSeeds->rays() : 0),
                                [&] { return std::to_string(doneAfter); }))
       return;
   }

@@ -208,19 +208,6 @@ std::string algorithmRefusal(const SceneDescription& desc, Algorithm algorithm) 
            " yet (its mutations end paths on the environment only in vacuum): use pt, bdpt, "
            "pssmlt, pssmlt-pt or mmlt";
   }
-  // Participating media: path tracing and BDPT track them (and the primary-sample-space chains
-  // over them, which draw the same paths), path-space MLT's chains have vertices in them. ERPT
-  // takes homogeneous media, where path tracing's seed values are f / p exactly; through a grid
-  // its chains would start from path tracing's estimate of a transmittance instead of their
-  // own, a start that is not their stationary distribution.
-  if (algorithm == Algorithm::ERPT) {
-    for (const MediumDescription& m : desc.media) {
-      if (m.type == MediumDescription::Type::Grid) {
-        return "density grids are not supported by " + name +
-               " yet (homogeneous media are): use pt, bdpt, pssmlt, pssmlt-pt, mmlt or mlt";
-      }
-    }
-  }
   return "";
 }
 

@@ -332,6 +332,8 @@ std::vector<ChainSpec> RenderJob::planTiles(const BootstrapResult& bootstrap) co
         s.erptChains = settings_.erptChains;
         s.erptLength = settings_.erptLength;
         s.erptDeposit = bootstrap.normalization / (settings_.erptChains * settings_.erptLength);
+        s.mediumSamples = settings_.mediumSamples;
+        s.mediumMarchSteps = settings_.mediumMarchSteps;
         specs.push_back(std::move(s));
       }
     }
@@ -398,18 +400,20 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
     m["farm:bootstrapSeconds"] = formatDouble(bootstrap.seconds);
     if (settings_.algorithm == Algorithm::MLT) {
       m["farm:mutationMix"] = formatMutationMix(settings_.mutationMix);
-      if (scene_->hasMedia()) {
-        m["farm:mediumTransmittance"] =
-            settings_.mediumMarchSteps > 0
-                ? "marched, " + std::to_string(settings_.mediumMarchSteps) + " steps"
-                : "ratio tracking, mean of " + std::to_string(settings_.mediumSamples);
-      }
     } else {
       m["farm:largeStepProbability"] = formatDouble(settings_.largeStepProbability);
     }
   } else {
     m["farm:samples"] = std::to_string(workDone);
     m["farm:samplesPerPixel"] = formatDouble(workDone / pixels);
+  }
+  const bool pathSpace =
+      settings_.algorithm == Algorithm::MLT || settings_.algorithm == Algorithm::ERPT;
+  if (pathSpace && scene_->hasMedia()) {
+    m["farm:mediumTransmittance"] =
+        settings_.mediumMarchSteps > 0
+            ? "marched, " + std::to_string(settings_.mediumMarchSteps) + " steps"
+            : "ratio tracking, mean of " + std::to_string(settings_.mediumSamples);
   }
   if (settings_.algorithm == Algorithm::ERPT) {
     m["farm:normalization"] = formatDouble(bootstrap.normalization);

@@ -39,7 +39,7 @@ struct RenderSettings {
   // erptChains chains of erptLength mutations.
   double erptChains = 1;
   int erptLength = 100;
-  // mlt through density grids: f's transmittances are the mean of mediumSamples ratio-tracking
+  // mlt and erpt through density grids: f's transmittances are the mean of mediumSamples ratio-tracking
   // estimates (pseudo-marginal MLT), or, with mediumMarchSteps > 0, marched with that many steps
   // per segment (deterministic, biased by the step).
   int mediumSamples = 1;

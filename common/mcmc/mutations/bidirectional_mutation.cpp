@@ -79,37 +79,6 @@ int sampleDiscrete(const std::vector<double>& weights, double total, Rng& rng) {
   return 0;
 }
 
-// One step of a random walk: the vertex after `at` (which was reached from `from`, and lies in
-// medium `around`), its direction sampled by the BSDF at `at` in the given transport mode, or
-// by the phase function of the medium `at` lies in. `mayEscape`: a ray that leaves the scene
-// ends on the environment (traceOrEscape), for the camera side's vertex that becomes x_0.
-bool scatterStep(const MutationContext& context, const PathVertex& at, const PathVertex& from,
-                 int around, TransportMode mode, bool mayEscape, Rng& rng, PathVertex* next) {
-  const Scene& scene = context.scene;
-  if (!(lengthSquared(from.p - at.p) > 0)) return false;
-  const Vec3f woWorld = directionBetween(at, from);  // `from` may be the environment's x_0
-  if (inMedium(at)) {
-    float pdf;
-    const Vec3f w = scene.medium(at.medium).phase().sample(
-        woWorld, Vec2f(rng.nextFloat(), rng.nextFloat()), &pdf);
-    if (!(pdf > 0)) return false;
-    return flyVertex(context, at, at.medium, w, rng, next);
-  }
-  const Bsdf& bsdf = scene.bsdfAt(at.shape, at.uv);
-  if (bsdf.isBlack() || !scene.sidesAgree(woWorld, at.n, at.ns)) return false;
-  Frame frame(at.ns);
-  float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
-  BsdfSample bs;
-  if (!bsdf.sample(frame.toLocal(woWorld), u, mode, &bs)) return false;
-  Vec3f w = normalize(frame.toWorld(bs.wi));
-  if (!scene.sidesAgree(w, at.n, at.ns)) return false;
-  if (mayEscape) {
-    bool escaped;
-    return traceOrEscape(context, at, w, next, &escaped);
-  }
-  return flyVertex(context, at, mediumLeaving(scene, at, w, around), w, rng, next);
-}
-
 // Whether an edge can join y[joint - 1] (the light side's end) and y[joint]: neither end
 // specular, and not the environment's direction to the camera, which reaches a point-like lens
 // with probability zero (as in BDPT).
@@ -195,8 +164,8 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
     } else {
       const PathVertex& at = y->vertices[size_t(index - 1)];
       const int around = index - 1 < L ? aroundKept(index - 1) : arrived(at);
-      if (!scatterStep(context_, at, y->vertices[size_t(index - 2)], around,
-                       TransportMode::Importance, false, rng, &v))
+      if (!scatterVertex(context_, at, y->vertices[size_t(index - 2)], around,
+                         TransportMode::Importance, false, rng, &v))
         return false;
     }
     y->vertices.push_back(v);
@@ -231,7 +200,7 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
       if (onPointLight(at) || atInfinity(at)) return false;
       const PathVertex& from = j == 0 ? suffix(1) : (j == 1 ? suffix(0) : grown[size_t(j - 2)]);
       const int around = j == 0 ? aroundKept(n - E) : arrived(at);
-      if (!scatterStep(context_, at, from, around, TransportMode::Radiance, mayEscape, rng, &v))
+      if (!scatterVertex(context_, at, from, around, TransportMode::Radiance, mayEscape, rng, &v))
         return false;
     }
     grown.push_back(v);

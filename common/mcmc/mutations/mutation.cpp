@@ -112,6 +112,33 @@ bool flyVertex(const MutationContext& context, const PathVertex& from, int mediu
   return false;
 }
 
+bool scatterVertex(const MutationContext& context, const PathVertex& at, const PathVertex& from,
+                   int around, TransportMode mode, bool mayEscape, Rng& rng, PathVertex* next) {
+  const Scene& scene = context.scene;
+  if (!(lengthSquared(from.p - at.p) > 0)) return false;
+  const Vec3f woWorld = directionBetween(at, from);  // `from` may be the environment's x_0
+  if (inMedium(at)) {
+    float pdf;
+    const Vec3f w = scene.medium(at.medium).phase().sample(
+        woWorld, Vec2f(rng.nextFloat(), rng.nextFloat()), &pdf);
+    if (!(pdf > 0)) return false;
+    return flyVertex(context, at, at.medium, w, rng, next);
+  }
+  const Bsdf& bsdf = scene.bsdfAt(at.shape, at.uv);
+  if (bsdf.isBlack() || !scene.sidesAgree(woWorld, at.n, at.ns)) return false;
+  Frame frame(at.ns);
+  float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+  BsdfSample bs;
+  if (!bsdf.sample(frame.toLocal(woWorld), u, mode, &bs)) return false;
+  Vec3f w = normalize(frame.toWorld(bs.wi));
+  if (!scene.sidesAgree(w, at.n, at.ns)) return false;
+  if (mayEscape) {
+    bool escaped;
+    return traceOrEscape(context, at, w, next, &escaped);
+  }
+  return flyVertex(context, at, mediumLeaving(scene, at, w, around), w, rng, next);
+}
+
 int mediumLeaving(const Scene& scene, const PathVertex& v, const Vec3f& w, int around) {
   return v.shape >= 0 ? scene.mediumOnSide(v.shape, v.n, w, around) : around;
 }

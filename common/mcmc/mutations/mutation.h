@@ -13,6 +13,7 @@
 #include <cstdint>
 
 #include "common/sampling/rng.h"
+#include "common/scene/bsdf.h"
 #include "common/transport/path.h"
 
 namespace farm {
@@ -90,6 +91,14 @@ bool traceOrEscape(const MutationContext& context, const PathVertex& from, const
 // it arrived in. Path::freeFlightDensity gives its density. Without media, traceVertex.
 bool flyVertex(const MutationContext& context, const PathVertex& from, int medium, const Vec3f& w,
                Rng& rng, PathVertex* hit);
+// One step of a random walk: the vertex after `at` (which was reached from `from`, and lies in
+// medium `around`), its direction sampled by the BSDF at `at` in the given transport mode, or
+// by the phase function of the medium `at` lies in, and the flight along it by flyVertex.
+// `mayEscape`: a ray that leaves the scene ends on the environment (traceOrEscape), for a camera
+// side's vertex that becomes x_0. Path::densities and Path::freeFlightDensity give the
+// vertex's density.
+bool scatterVertex(const MutationContext& context, const PathVertex& at, const PathVertex& from,
+                   int around, TransportMode mode, bool mayEscape, Rng& rng, PathVertex* next);
 // The medium that a path leaving v in direction w starts in, `around` being the medium around
 // v (on either side of a surface without a medium interface).
 int mediumLeaving(const Scene& scene, const PathVertex& v, const Vec3f& w, int around);
