@@ -38,7 +38,7 @@ bool ManifoldPerturbation::propose(const Path& x, Rng& rng, Path* y, MutationRec
   for (int i = m + 1; i <= k; ++i) (*y)[i] = lens[i];
   Path back;
   if (!manifoldWalk(context_, *y, e, m, x[m], &back, &stats_) ||
-      !sameSpecularChain(x, back, e, m)) {
+      !sameSpecularChain(x, back, e, m, manifoldWalkTolerance(context_.scene, x[m].p))) {
     ++irreversible_;
     return false;
   }

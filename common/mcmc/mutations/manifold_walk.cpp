@@ -28,11 +28,12 @@ bool project(const MutationContext& context, const Path& x, int a, int b, const 
 
 }  // namespace
 
-bool sameSpecularChain(const Path& a, const Path& b, int first, int last) {
+bool sameSpecularChain(const Path& a, const Path& b, int first, int last, double walkTolerance) {
   for (int i = first + 1; i < last; ++i) {
     const double edge =
         std::min(double(length(a[i].p - a[i - 1].p)), double(length(a[i + 1].p - a[i].p)));
-    if (a[i].shape != b[i].shape || !(double(length(b[i].p - a[i].p)) <= 1e-3 * edge)) return false;
+    const double apart = std::max(1e-3 * edge, kSameSolutionTolerances * walkTolerance);
+    if (a[i].shape != b[i].shape || !(double(length(b[i].p - a[i].p)) <= apart)) return false;
   }
   return true;
 }

@@ -32,9 +32,14 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
                   std::vector<double>* residuals = nullptr);
 
 // Whether b's chain between x_first and x_last is a's, the same solution of the constraints: each
-// inner vertex on a's shape and within a thousandth of its shorter edge in a of a's (walks
-// converge to a millionth of the scene; distinct solutions lie a visible distance apart).
-bool sameSpecularChain(const Path& a, const Path& b, int first, int last);
+// inner vertex on a's shape and within a thousandth of its shorter edge in a of a's, or within
+// kSameSolutionTolerances walk tolerances where that is larger (distinct solutions lie a visible
+// distance apart). A walk ends within its tolerance of its target, and an ill-conditioned chain
+// (vertices a millimetre apart near a caustic's fold) holds its inner vertices only to some
+// times that: a thousandth of a 3 mm edge is 3 um, what the walk's end is held to, and the same
+// solution found again lay 5-60 um from the first, 1-20 tolerances, on the water caustic.
+constexpr double kSameSolutionTolerances = 32;
+bool sameSpecularChain(const Path& a, const Path& b, int first, int last, double walkTolerance = 0);
 
 // The tolerance within which a walk's chain ends at its target.
 double manifoldWalkTolerance(const Scene& scene, const Vec3f& target);

@@ -394,5 +394,28 @@ TEST(ManifoldWalk, CountsTheWalksThatFail) {
   EXPECT_GT(stats.halvings, 0u);
 }
 
+// The same solution, found again by a walk held to its tolerance at the chain's end, lies a few
+// tolerances off where the chain's edges are millimetres long; the comparison takes it as the
+// same solution then, and a chain a visible distance off as another.
+TEST(ManifoldWalk, SameSolutionIsHeldToTheWalksPrecision) {
+  Path a;
+  a.vertices.resize(4);
+  a[0].p = Vec3f(0, 0, 0);
+  a[1].p = Vec3f(0.003f, 0, 0);  // edges of 3 mm: a thousandth is 3 um
+  a[2].p = Vec3f(0.006f, 0, 0);
+  a[3].p = Vec3f(0.009f, 0, 0);
+  a[1].shape = a[2].shape = 2;
+  const double tolerance = 3e-6;
+  Path near = a, far = a, other = a;
+  near[1].p.y += 20 * float(tolerance);  // 60 um: 20 tolerances
+  far[1].p.y += 200 * float(tolerance);  // 0.6 mm: another solution
+  other[2].shape = 3;
+  EXPECT_TRUE(sameSpecularChain(a, near, 0, 3, tolerance));
+  EXPECT_FALSE(sameSpecularChain(a, near, 0, 3));  // a thousandth of the edge alone
+  EXPECT_FALSE(sameSpecularChain(a, far, 0, 3, tolerance));
+  EXPECT_FALSE(sameSpecularChain(a, other, 0, 3, tolerance));
+  EXPECT_TRUE(sameSpecularChain(a, a, 0, 3, tolerance));
+}
+
 }  // namespace
 }  // namespace farm
