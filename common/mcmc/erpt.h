@@ -7,7 +7,9 @@
 // caustic perturbations, which keep f stationary; the number of chains is e / (N e_d) rounded up
 // or down at random, so the expected deposit of every seed path is its energy and the image is
 // unbiased, whatever e_d is. e_d = Z / (chains per seed * N), Z the mean energy of a seed (from
-// the bootstrap), so that a seed starts about `chains per seed` chains.
+// the bootstrap), so that a seed starts about `chains per seed` chains. Through density grids
+// the seeds come from GridSeedSampler instead (erpt_grid_seeds.h), and the chains start with
+// each seed's own estimate of f, as pseudo-marginal chains must.
 //
 // A work unit is a tile with its seeds (pass after pass over its pixels, seed k of pixel p
 // drawing from the stream (seed, p, pass)); it flushes and resumes at seed boundaries. Under a

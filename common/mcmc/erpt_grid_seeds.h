@@ -20,6 +20,7 @@
 // path's density, independent of its throughput so that both strategies can evaluate it).
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "common/mcmc/mutations/mutation.h"
 #include "common/scene/scene.h"
