@@ -70,6 +70,7 @@ struct RenderOptions {
   int errorGroups = 0;
   bool noPlan = false;
   std::string shadingNormals = "scene";
+  int maxDepth = 0;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
 };
 
@@ -168,6 +169,12 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "light of such paths) or lax (keep them, as Mitsuba without strictNormals, "
                    "pbrt-v4 and Tungsten do)")
       ->default_str("scene");
+  command
+      ->add_option("--max-depth", o->maxDepth,
+                   "longest path in edges (2: direct light only; Mitsuba's maxDepth, which "
+                   "Tungsten's max_bounces equals): 0 the scene file's (unbounded where it "
+                   "names none), -1 unbounded, at most 4096")
+      ->default_str("0");
   o->timeOption = command->add_option(
       "--time", o->time,
       "wall-clock budget in seconds, counted from the job's start (bootstrap included): "
@@ -264,6 +271,7 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     return false;
   }
   s->seed = seed;
+  s->maxDepth = o.maxDepth;
   std::string problem = s->validate();
   if (!problem.empty()) {
     *error = problem;

@@ -175,7 +175,11 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   std::ostringstream out;
   const RenderSettings& s = p.settings;
   out << "render: " << scene << ", " << algorithmName(s.algorithm) << ", " << p.width << "x"
-      << p.height << ", seed " << s.seed << "\n";
+      << p.height << ", seed " << s.seed;
+  // Only where --max-depth overrode the file: the file's own depth is in the EXR's metadata.
+  if (s.maxDepth > 0) out << ", paths of at most " << s.maxDepth << " edges (--max-depth)";
+  if (s.maxDepth < 0) out << ", paths of any length (--max-depth -1)";
+  out << "\n";
   const double pixels = double(p.width) * p.height;
   const double zError = relativeZError(p);
   if (needsBootstrap(s.algorithm)) {

@@ -340,6 +340,48 @@ TEST(FarmRender, BootstrapCandidatesOption) {
   }
 }
 
+// `farm render --max-depth`: the longest path in edges overrides the scene file's (65 on the
+// Cornell box), the image's metadata and the report say so, 2 edges leave only direct light (a
+// darker image), and a depth out of range is a clear error.
+TEST(FarmRender, MaxDepthOption) {
+  ScratchDir scratch("max-depth-option");
+  ASSERT_FALSE(scratch.path().empty());
+  auto render = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> argv = {FARM_CLI_BIN, "render", kScene,     "-o",        scratch / out,
+                                     "--width",    "32",     "--height", "32",        "--algorithm",
+                                     "pt",         "--spp",  "16",       "--threads", "2"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return runCommand(argv, seconds(120), scratch.path());
+  };
+  CommandResult file = render("file.exr", {});
+  ASSERT_EQ(file.exitCode, 0) << file.err;
+  EXPECT_EQ(file.out.find("--max-depth"), std::string::npos) << file.out;
+  CommandResult direct = render("direct.exr", {"--max-depth", "2"});
+  ASSERT_EQ(direct.exitCode, 0) << direct.err;
+  EXPECT_NE(direct.out.find("paths of at most 2 edges (--max-depth)"), std::string::npos)
+      << direct.out;
+  Image a, b;
+  ImageMetadata ma, mb;
+  std::string error;
+  ASSERT_TRUE(readExr(scratch / "file.exr", &a, &error, &ma)) << error;
+  ASSERT_TRUE(readExr(scratch / "direct.exr", &b, &error, &mb)) << error;
+  EXPECT_EQ(ma.at("farm:maxDepth"), "65");
+  EXPECT_EQ(mb.at("farm:maxDepth"), "2");
+  double sumFile = 0, sumDirect = 0;
+  for (float v : a.rgb) sumFile += v;
+  for (float v : b.rgb) sumDirect += v;
+  // Indirect light is a third of the Cornell box's; 16 samples a pixel over 1024 pixels put the
+  // image's mean within a few percent.
+  EXPECT_LT(sumDirect, 0.85 * sumFile);
+  for (const char* bad : {"-2", "4097"}) {
+    CommandResult refused = render("bad.exr", {"--max-depth", bad});
+    EXPECT_NE(refused.exitCode, 0) << bad;
+    EXPECT_NE(refused.err.find("--max-depth must be -1 (unbounded), 0 (the scene's) or 1..4096"),
+              std::string::npos)
+        << bad << ": " << refused.err;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Algorithms, ClusterTest,
     ::testing::Values(ClusterCase{"pt", {"--spp", "64"}}, ClusterCase{"bdpt", {"--spp", "16"}},

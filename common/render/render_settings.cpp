@@ -44,7 +44,7 @@ std::string RenderSettings::validate() const {
     err << "time budget must be a number of seconds between 0 and 30 days, not "
         << timeBudgetSeconds;
   } else if (maxDepth < -1 || maxDepth > 4096) {
-    err << "max depth must be -1 (unbounded), 0 (the scene's) or 1..4096, not " << maxDepth;
+    err << "--max-depth must be -1 (unbounded), 0 (the scene's) or 1..4096, not " << maxDepth;
   } else if (bootstrapSamples < 0 || bootstrapSamples > (int64_t(1) << 26)) {
     // Eight bytes a candidate, all held at once: 2^26 is 512 MiB.
     err << "--bootstrap-candidates must be in 0.." << (int64_t(1) << 26) << ", not "
