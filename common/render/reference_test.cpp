@@ -221,33 +221,44 @@ TEST(Reference, VeachBidirEnergyRedistribution) {
 // through its wavy surface and lit through it by a light a fifth of a pixel across (L S D S E),
 // which path tracing, BDPT and the primary-sample chains leave far too dark. Path-space MLT with
 // manifold exploration (the manifold perturbation, and manifold next-event estimation for its
-// seeds and Z) must come within 2% of the reference in each channel mean, over pixels capped at
-// the reference's 99.9th percentile as its README asks (imgcmp.py's figure). The reference is
-// photon mapping, about 1% bright; its renderer keeps the paths whose directions the smooth
+// seeds and Z) must come within 2% of the reference in each channel mean (the criterion).
+//
+// Paths of at most 8 edges, not the file's 9: the reference was rendered with Tungsten's
+// max_bounces 8, its own example scene's value, which counts edges as maxDepth does. Measured:
+// Tungsten's BDPT (88ea020, 512 spp, this scene with the file's normals) with max_bounces 8 and 9
+// matches ours with --max-depth 8 and 9 on the ceiling to 0.2%; the 9th edge adds 3.4%, 2.8% and
+// 1.8% there (red bounces most), and the reference's ceiling lies 0.56%, 0.57% and 0.56% above
+// depth 8 (the same in every channel: photon mapping's kernel, not a path length), 2.7%, 2.1% and
+// 1.2% below depth 9. So the reference is depth 8 and about 0.6% bright, as its README's 1%
+// foretells; the expected ratio below is 1 - 0.6%.
+//
+// The means are over the pixels where the reference lies below its 99.9th percentile in every
+// channel (the light's pixels would decide them alone), unclipped, as expectAgreement takes
+// them: a cap (imgcmp.py's figure, printed) also clips the spikes of chains held long at one
+// path and pulls a spiky image's mean down, here by 1.5-2.5%.
+//
+// Shading normals are lax: the reference's renderer keeps the paths whose directions the smooth
 // surface's two normals put on different sides (strict normals, which the scene file asks for,
-// drop 10% of Z here), so the render is lax. Z's standard error at this bootstrap is about 0.4%.
-// Measured with these seeds: within 0.9%; without the manifold perturbation 7.2%, 5.3% and 0.8%
-// low, with strict normals 8.2%, 9.1% and 8.4% low.
-// The 2% is the criterion, not a bound drawn from this estimator's variance. Against it:
-// over five seeds (11 to 15) one render's capped red mean spread by 1.3% (standard deviation)
-// about +0.4%, so the average of two has about 0.9%, and 2% is a little over two of those
-// from the reference; Z's standard error (0.3-0.7% a render) is part of that spread. A bias of
-// the size the mutants show (5-9%) is several times it.
-// The cap also clips the spikes of chains held long at one path, which pulls the capped means
-// down: over the pixels the cap leaves alone (printed, a linear mean), seeds 13-16 were 3.6%, 2.5%
-// and 1.1% above the reference, and a change that held 3-8 times fewer chains left those as they
-// were but raised the capped means by about 1.8%, past 2% (README, "What is left").
+// drop 10% of Z here). Z's standard error at this bootstrap is about 0.4%.
+//
+// Measured with seeds 11 and 12: 1.4%, 1.7% and 2.4% below the reference (0.8%, 1.1% and 1.8%
+// below 1 - 0.6%). Over six seeds (11-16) 1.6%, 1.8% and 2.6% below it, one render's spread
+// 0.8%, 0.25% and 1.4%: mlt is 1-2% darker than the reference's bias explains, a deficit this
+// test's 2% does not resolve and README "What is left" keeps open. 8 times the bootstrap's
+// candidates left it as it was (1.5%, 1.6%, 2.4% over seeds 11-13).
 TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   Image ref;
   std::string error;
   ASSERT_TRUE(readExr(kShared + "/references/water-caustic-256.exr", &ref, &error)) << error;
-  // Two renders of independent seeds, averaged: each alone lands within 2% in 4 seeds of 5.
+  constexpr int kReferenceMaxDepth = 8;     // Tungsten's max_bounces (see above)
+  constexpr double kReferenceBias = 0.006;  // photon mapping's, measured on the ceiling
   Image average(ref.width, ref.height);
   double zRelative[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
     RenderSettings s;
     s.algorithm = Algorithm::MLT;
     s.shadingNormals = ShadingNormals::Lax;
+    s.maxDepth = kReferenceMaxDepth;
     s.width = ref.width;
     s.height = ref.height;
     s.mutationsPerPixel = 375;
@@ -263,12 +274,6 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   }
   ErrorMetrics m;
   ASSERT_TRUE(compareImages(average, ref, &m, &error)) << error;
-  std::printf(  // the means capped as imgcmp.py caps them
-      "water caustic mlt: capped means %.4f %.4f %.4f (ref %.4f %.4f %.4f), Z's relative "
-      "standard errors %.2f%% %.2f%%\n",
-      m.mean[0], m.mean[1], m.mean[2], m.referenceMean[0], m.referenceMean[1], m.referenceMean[2],
-      100 * zRelative[0], 100 * zRelative[1]);
-  // The means over pixels whose reference lies below the cap in every channel, nothing clipped.
   const double cap = meanCap(ref);
   double masked[3] = {0, 0, 0}, maskedRef[3] = {0, 0, 0};
   for (size_t i = 0; i + 2 < ref.rgb.size(); i += 3) {
@@ -279,11 +284,15 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
     }
   }
   std::printf(
-      "  over pixels below the cap, unclipped: %+.2f%% %+.2f%% %+.2f%% against the reference\n",
-      100 * (masked[0] / maskedRef[0] - 1), 100 * (masked[1] / maskedRef[1] - 1),
-      100 * (masked[2] / maskedRef[2] - 1));
+      "water caustic mlt, depth %d: over pixels below the cap %+.2f%% %+.2f%% %+.2f%% against "
+      "the reference; capped means %+.2f%% %+.2f%% %+.2f%%; Z's relative standard errors %.2f%% "
+      "%.2f%%\n",
+      kReferenceMaxDepth, 100 * (masked[0] / maskedRef[0] - 1),
+      100 * (masked[1] / maskedRef[1] - 1), 100 * (masked[2] / maskedRef[2] - 1),
+      100 * (m.mean[0] / m.referenceMean[0] - 1), 100 * (m.mean[1] / m.referenceMean[1] - 1),
+      100 * (m.mean[2] / m.referenceMean[2] - 1), 100 * zRelative[0], 100 * zRelative[1]);
   for (int ch = 0; ch < 3; ++ch)
-    EXPECT_NEAR(m.mean[ch] / m.referenceMean[ch], 1.0, 0.02) << "channel " << ch;
+    EXPECT_NEAR(masked[ch] / maskedRef[ch], 1.0 - kReferenceBias, 0.02) << "channel " << ch;
 }
 
 }  // namespace
