@@ -16,27 +16,31 @@ times=("$@")
 longest=${times[-1]}
 shared=${FARM_SHARED_DIR:-../shared}
 algorithms=pt,bdpt,pssmlt,pssmlt-pt,mmlt,mlt,erpt
-# scene  scene file  reference  width height
+# scene  scene file  reference  width height  [flags that make the reference's integral]
+# The water-caustic reference keeps paths whose sides its normals dispute (lax) and has at most
+# 8 edges where the file says strict and 9 (README, "Conventions the estimators share"):
+# against the file's own settings its relative MSE would carry that 3-10% difference of means.
 scenes=(
   "cornell-box $shared/scenes/cornell-box/scene.xml $shared/references/cornell-box-256.exr 256 256"
   "veach-bidir $shared/scenes/veach-bidir/scene.xml $shared/references/veach-bidir-256.exr 256 256"
   "veach-mis $shared/scenes/veach-mis/scene.xml $shared/references/veach-mis-320.exr 320 180"
-  "water-caustic $shared/scenes/water-caustic/scene.xml $shared/references/water-caustic-256.exr 256 256"
+  "water-caustic $shared/scenes/water-caustic/scene.xml $shared/references/water-caustic-256.exr 256 256 --shading-normals lax --max-depth 8"
   "veach-ajar $shared/scenes/veach-ajar/scene.pbrt tests/data/veach-ajar-bdpt-256.exr 256 144"
 )
 mkdir -p "$out"
 for entry in "${scenes[@]}"; do
-  read -r name scene reference width height <<< "$entry"
+  read -r name scene reference width height rest <<< "$entry"
+  read -r -a flags <<< "${rest:-}"
   [ -n "${ONLY_SCENE:-}" ] && [ "$ONLY_SCENE" != "$name" ] && continue
   dir="$out/$name"
   mkdir -p "$dir"
   # AUTO_ONLY=1: keep the algorithms' series from an earlier run, render auto again.
   [ -n "${AUTO_ONLY:-}" ] || build/bin/farm compare "$scene" --algorithms "$algorithms" --time "$longest" \
     --width "$width" --height "$height" --seed 1 --reference "$reference" --report "$dir" \
-    > "$dir/compare.log" 2>&1 || echo "$name: compare failed (see $dir/compare.log)"
+    "${flags[@]}" > "$dir/compare.log" 2>&1 || echo "$name: compare failed (see $dir/compare.log)"
   for t in "${times[@]}"; do
     build/bin/farm render "$scene" --algorithm auto --time "$t" --width "$width" \
-      --height "$height" --seed 1 --reference "$reference" --report "$dir/auto-$t" \
+      --height "$height" --seed 1 --reference "$reference" --report "$dir/auto-$t" "${flags[@]}" \
       -o "$dir/auto-$t.exr" > "$dir/auto-$t.log" 2>&1 || echo "$name: auto at $t s failed (see $dir/auto-$t.log)"
   done
 done
