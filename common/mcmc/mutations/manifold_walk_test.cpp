@@ -417,5 +417,43 @@ TEST(ManifoldWalk, SameSolutionIsHeldToTheWalksPrecision) {
   EXPECT_TRUE(sameSpecularChain(a, a, 0, 3, tolerance));
 }
 
+// A chain followed across an edge a few millimetres long meets the law of reflection at both
+// ends of it, to float precision. Two mirrors meet at 90 degrees in a groove under a diffuse
+// ceiling; a ray straight down strikes the first 2.3 mm from the groove's floor and crosses
+// 3.3 mm to the second, which sends it straight back up.
+// A ray leaving a mirror from spawnRay's origin, 3e-5 off the surface here (1e-5 of the
+// scene), arrives turned by that offset over the edge's length: 0.01-0.02 rad, which the
+// manifold walk's constraints would count against the chain.
+TEST(ManifoldWalk, FollowedChainsMeetTheirConstraintsOnMillimetreEdges) {
+  SceneDescription d = opticsBench();
+  const float h = std::sqrt(0.5f);
+  const Vec3f alongA(-h, h, 0), alongB(h, h, 0);
+  d.shapes.push_back(quadShape(Vec3f(0, 0, -1), alongA, Vec3f(0, 0, 2), kMirror));  // faces +x
+  d.shapes.push_back(quadShape(Vec3f(0, 0, -1), Vec3f(0, 0, 2), alongB, kMirror));  // faces -x
+  d.shapes.push_back(quadShape(Vec3f(-3, 1, -3), Vec3f(6, 0, 0), Vec3f(0, 0, 6), kDiffuse));
+  Scene scene(d);
+  MutationContext context{scene, -1};
+  const Vec3f onA = alongA * 0.0023f;
+  const PathVertex start = surfacePoint(scene, Vec3f(onA.x, 0.5f, 0.1f), Vec3f(onA.x, 1.5f, 0.1f));
+  ASSERT_EQ(start.shape, 2);
+  const Vec3f down(0, -1, 0);
+  Path x;
+  ASSERT_TRUE(traceChain(context, start, down, {true, true}, 2, &x));
+  ASSERT_EQ(x.vertices[1].shape, 0);
+  ASSERT_EQ(x.vertices[2].shape, 1);
+  Path y = x;
+  ASSERT_TRUE(followSpecularChain(context, x, &y, 0, 3, down));
+  const double edge = length(y[2].p - y[1].p);
+  EXPECT_NEAR(edge, 0.0023 * std::sqrt(2.0), 1e-4);  // 3.3 mm
+  for (int i = 1; i <= 2; ++i) {
+    const Vec3f wi = normalize(y[i - 1].p - y[i].p), wo = normalize(y[i + 1].p - y[i].p);
+    const Vec3f n = y[i].n;
+    const Vec3f mirrored = n * (2 * dot(wi, n)) - wi;
+    const double error = angleBetween(mirrored, wo);
+    std::printf("vertex %d: the law of reflection missed by %.3g rad\n", i, error);
+    EXPECT_LT(error, 1e-5) << "vertex " << i;
+  }
+}
+
 }  // namespace
 }  // namespace farm

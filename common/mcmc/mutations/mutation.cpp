@@ -32,14 +32,32 @@ enum class Traced { Surface, LeftTheScene, Lost };
 
 // The ray from `from` in direction w, through null boundaries: the first surface it meets
 // (*hit), or that it left the scene, or that it crossed too many boundaries to follow.
+// With exactLine it leaves from the vertex itself, not from spawnRay's origin off the surface,
+// and passes over a first hit within that offset (its own surface, or a neighbour's edge met
+// again through rounding). A specular chain's next vertex can lie a millimetre away across a
+// wave crest, and the offset (1e-5 of the scene, moved along the normal) would turn so short an
+// edge by a hundredth of a radian: the chain traced would miss the law of reflection or
+// refraction that the manifold walk's constraints hold it to, and no walk would find it again.
 Traced traceRay(const MutationContext& context, const PathVertex& from, const Vec3f& w,
-                PathVertex* hit) {
+                PathVertex* hit, bool exactLine = false) {
   const Scene& scene = context.scene;
+  if (!isFinite(w)) return Traced::Lost;
   Ray ray = scene.spawnRay(from.p, from.n, w);
+  float passOver = 0;  // > 0: the first ray's hits nearer than this are the vertex's own
+  if (exactLine) {
+    passOver = length(ray.o - from.p);
+    ray.o = from.p;
+  }
   for (int crossing = 0; crossing < 1024; ++crossing) {
     ++context.rays;
     SurfaceHit h;
     if (!scene.intersect(ray, &h)) return Traced::LeftTheScene;
+    if (passOver > 0 && h.t < passOver) {
+      ray.o = from.p + w * passOver;  // on the line, past the vertex's own surface
+      passOver = 0;
+      continue;
+    }
+    passOver = 0;
     if (scene.hasMedia() && scene.isNullBoundary(h.shape)) {
       ray = scene.spawnRay(h.p, h.ng, w);
       continue;
@@ -276,7 +294,9 @@ bool followSpecularChain(const MutationContext& context, const Path& x, Path* y,
   const int step = to > from ? 1 : -1;
   Vec3f w = firstDirection;
   for (int i = from + step;; i += step) {
-    if (!traceVertex(context, (*y)[i - step], w, &(*y)[i])) return false;
+    // Rays that leave a specular vertex of the chain run along the bounce's own line.
+    const bool exactLine = i != from + step;
+    if (traceRay(context, (*y)[i - step], w, &(*y)[i], exactLine) != Traced::Surface) return false;
     if (i == to) return !y->isSpecular(scene, i);
     if (!y->isSpecular(scene, i)) return false;
     if (!specularBounce(scene, (*y)[i], (*y)[i - step].p, isReflection(x, i), &w)) return false;
