@@ -244,7 +244,7 @@ TEST(Reference, VeachBidirEnergyRedistribution) {
 // surface's two normals put on different sides (strict normals, which the scene file asks for,
 // drop 10% of Z here). Z's standard error at this bootstrap is about 0.4%.
 //
-// Four renders: one render's blue mean spreads by 1.4% (seeds 11-16), so two leave a 1% spread
+// Four renders: one render's blue mean spreads by 1.2-1.4% (seeds 11-16), so two leave 1% of spread
 // beside a margin of about that. Measured, seeds 11-14 averaged: unclipped 1.2%, 1.3% and 1.8%
 // below the reference, capped 1.3%, 1.3% and 1.8% below (0.7%, 0.7% and 1.2% from 1 - 0.6%).
 // Over six seeds (11-16) one render is 1.4%, 1.5% and 2.0% below it unclipped, 1.7%, 1.7% and
