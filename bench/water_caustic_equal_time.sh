@@ -9,6 +9,7 @@
 # relative MSE and their mean, what the hot pixels hide: the relative MSE without the 100
 # worst pixels, the median pixel's, and the capped channel means against the reference.
 #   bench/water_caustic_equal_time.sh [SECONDS] [OUT] [SEEDS...]   (default 30 out/water-caustic 1 2 3)
+# ONLY="mlt mmlt" renders those rows alone (the table then lists only them).
 # Run it alone: timings taken beside a build are noise. About 8 x SECONDS a seed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,6 +29,7 @@ mkdir -p "$out"
 for seed in "${seeds[@]}"; do
   for run in "${runs[@]}"; do
     read -r name flags <<< "$run"
+    if [ -n "${ONLY:-}" ] && [[ " $ONLY " != *" $name "* ]]; then continue; fi
     dir="$out/$name-$seed"
     mkdir -p "$dir"
     # shellcheck disable=SC2086
@@ -37,11 +39,14 @@ for seed in "${seeds[@]}"; do
   done
 done
 /usr/bin/python3 - "$out" "$reference" "$seconds" "${seeds[@]}" <<'EOF'
+import os
 import sys
 import numpy as np
 import OpenImageIO as oiio
 out, reference, seconds, seeds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
 names = ["pt", "bdpt", "pssmlt", "pssmlt-pt", "mmlt", "erpt", "mlt-no-manifold", "mlt"]
+if os.environ.get("ONLY"):
+    names = [n for n in names if n in os.environ["ONLY"].split()]
 
 def load(path):
     return np.asarray(oiio.ImageBuf(path).get_pixels(oiio.FLOAT), np.float64)[..., :3]
