@@ -148,13 +148,15 @@ TEST(ManifoldNextEvent, TakesOverWhatBdptCarriesInAPoolUnderAnAreaLight) {
 // that BDPT's camera paths hit it through the water often enough to converge on the paths
 // L S D S E too: manifold next-event estimation on a wavy mesh, where a point sees the light
 // along several chains, two of which meet at each caustic's fold, so that telling one solution
-// from another (sameSpecularChain) decides the trial count. Here: 102700 +- 600 by BDPT, 102510
-// +- 280 by this estimator. Resolves differences of 3% (combined standard error 0.65%); it fails
-// with the estimate 10% low (-10.2%) and with sameSpecularChain's tolerance a thousandth of
-// what it is (+49%: the same chain found again is taken for another). At the scene's own light
+// from another (sameSpecularChain) decides the trial count. Here: 102700 +- 600 by BDPT, 102140
+// +- 260 by this estimator (102510 +- 280 before its recurrences were told apart to the walk's
+// tolerance). Resolves differences of 3% (combined standard error 0.65%); it fails with the
+// estimate 10% low (-10.2%) and with sameSpecularChain's tolerances a thousandth of what they
+// are (x5.2: the same chain found again is taken for another). At the scene's own light
 // BDPT converges only on the covered paths seen directly (L S D E): 11.10 +- 0.04 against this
 // estimator's 11.11 +- 0.08 (2^22 samples); and with the light 0.2 m by 0.16 m, 163.7 +- 0.6
-// against 162.5 +- 0.9 there and 1608 +- 9 against 1604 +- 2 on the rest (2^23 samples).
+// against 162.5 +- 0.9 there and 1608 +- 9 against 1604 +- 2 on the rest (2^23 samples; both
+// measured before that change).
 TEST(ManifoldNextEvent, TakesOverWhatBdptCarriesUnderTheWaterCausticsWaves) {
   SceneDescription d =
       loadSceneDescription(std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml");
