@@ -1,9 +1,10 @@
 // The error a job reports without a reference (batch means over its chain groups,
 // common/film/batch_means.h) against the error measured with one, on the shared scenes whose
 // references every algorithm converges to (cornell-box, veach-bidir, veach-mis, veach-ajar):
-// within a factor of two, every algorithm. (On
-// water-caustic every local sampler misses a third of the light: its error against the
-// reference is that deficit, which no group sees; README, "Error without a reference".)
+// within a factor of two, every algorithm; and on water-caustic, for mlt, the one algorithm that
+// converges there (with manifold walks), rendered as its reference was (lax normals, 8 edges).
+// Every local sampler misses a third of its light: its error against the reference is that
+// deficit, which no group sees (README, "Error without a reference").
 #include <gtest/gtest.h>
 
 #include <string>
@@ -51,6 +52,10 @@ TEST_P(ErrorEstimate, IsWithinAFactorOfTwoOfTheReferencesError) {
   o.settings.samplesPerPixel = c.budget;
   o.settings.mutationsPerPixel = c.budget;
   o.settings.seed = 11;
+  if (std::string(c.scene) == "water-caustic") {
+    o.settings.shadingNormals = ShadingNormals::Lax;
+    o.settings.maxDepth = 8;
+  }
   o.scenePath = t.scene;
   o.referencePath = t.reference;
   o.threads = 2;
@@ -85,7 +90,8 @@ TEST_P(ErrorEstimate, IsWithinAFactorOfTwoOfTheReferencesError) {
 
 // Budgets of one to seven seconds on two threads; erpt at 2 seeds per pixel has two groups.
 // Measured at seed 11 (estimate / measured): 0.91-0.995 on cornell-box, 0.75-1.25 on
-// veach-bidir, 0.89-1.32 on veach-mis, 0.72-1.27 on veach-ajar.
+// veach-bidir, 0.89-1.32 on veach-mis, 0.72-1.27 on veach-ajar; on water-caustic at seeds 11-15,
+// 0.93, 0.90, 1.01, 0.89 and 0.90 (about 2 s each; at 32 mutations a pixel, 0.61 and 0.94).
 INSTANTIATE_TEST_SUITE_P(
     SharedScenes, ErrorEstimate,
     ::testing::Values(
@@ -104,7 +110,8 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"veach-ajar", Algorithm::PathTracing, 16},
         Case{"veach-ajar", Algorithm::Bidirectional, 4}, Case{"veach-ajar", Algorithm::PSSMLT, 8},
         Case{"veach-ajar", Algorithm::PSSMLTOverPT, 16}, Case{"veach-ajar", Algorithm::MMLT, 16},
-        Case{"veach-ajar", Algorithm::MLT, 16}, Case{"veach-ajar", Algorithm::ERPT, 2}),
+        Case{"veach-ajar", Algorithm::MLT, 16}, Case{"veach-ajar", Algorithm::ERPT, 2},
+        Case{"water-caustic", Algorithm::MLT, 16}),
     [](const auto& info) {
       std::string name = std::string(info.param.scene) + "_" + algorithmName(info.param.algorithm);
       for (char& ch : name)
