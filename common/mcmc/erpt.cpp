@@ -16,6 +16,12 @@ namespace {
 constexpr uint64_t kErptDomain = 0xe497;
 }  // namespace
 
+bool startAtSeed(PathChain& chain, const Path& x, const PathContribution* fx, Rng& rng) {
+  if (!fx) return chain.start(x, rng);
+  chain.resume(x, *fx);
+  return true;
+}
+
 void runErptTile(const Scene& scene, const ChainSpec& spec,
                  const std::function<bool(ChainFlush&&)>& onFlush,
                  const std::atomic<bool>* cancel) {
@@ -31,7 +37,10 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
   if (spec.firstSample < 0 || spec.firstSample % tilePixels != 0)
     throw std::runtime_error("chain " + std::to_string(spec.chainIndex) +
                              ": its first seed must start a pass over the tile");
-  MutationMix perturbations{0, 0, 1, 1, 0};  // Cline et al.: lens and caustic perturbations
+  // Cline et al.'s lens and caustic perturbations, and the manifold perturbation at mlt's
+  // default weight, which moves the seeds of paths lit through a specular chain (L S+ D S* E)
+  // that the other two cannot (manifold_perturbation.h).
+  MutationMix perturbations{0, 0, 1, 1, 0, 0.2};
   PathChain chain(scene, spec.maxDepth, perturbations, spec.mediumSamples, spec.mediumMarchSteps);
   PathTracer tracer(scene, spec.maxDepth);
   std::unique_ptr<GridSeedSampler> gridSeeds;
@@ -74,11 +83,7 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
       if (!flusher.check(value)) return;
       const double energy = luminance(value);
       if (!(energy > 0)) return;
-      auto start = [&] {
-        if (!fx) return chain.start(x, rng);
-        chain.resume(x, *fx);
-        return true;
-      };
+      auto start = [&] { return startAtSeed(chain, x, fx, rng); };
       if (!start()) {
         // A path the chains cannot evaluate (a lobe at the edge of rounding): its energy
         // stays where path tracing put it.

@@ -1,17 +1,20 @@
 // ERPT's seeds through density grids: their energies, summed over the paths of one camera walk,
 // are an unbiased estimate of the film point's splat, the same as path tracing's (which draws
 // its paths by delta tracking, independently); each strategy's share is checked too, so that a
-// wrong density in either shows.
+// wrong density in either shows. And the chains start where the pseudo-marginal target puts
+// them (erpt.h's startAtSeed).
 #include "common/mcmc/erpt_grid_seeds.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
 #include "common/math/statistics.h"
+#include "common/mcmc/erpt.h"
 #include "common/render/render_job.h"
 #include "common/transport/path_tracer.h"
 
@@ -86,6 +89,108 @@ TEST(GridSeedSampler, SeedEnergiesSumToPathTracingsSplat) {
     // spread, which the comparison of means alone would excuse.
     EXPECT_LT(a.channel[c].standardError, 1.5 * b.channel[c].standardError) << "channel " << c;
   }
+}
+
+// Whether x passes through a density grid: the paths on which a transmittance is estimated.
+bool throughGrid(const Scene& scene, const Path& x) {
+  PathMedia media;
+  if (!x.media(scene, &media)) return false;
+  for (const PathMedia::Edge& e : media.edges) {
+    for (const MediumSegment& s : e.segments) {
+      if (s.medium >= 0 && s.length > 0 &&
+          scene.description().media[size_t(s.medium)].type == MediumDescription::Type::Grid)
+        return true;
+    }
+  }
+  return false;
+}
+
+// A pseudo-marginal chain's target is the pair (x, u) of a path and its estimate's numbers, of
+// density f^(x, u) q(u) (Kronander et al. 2015, 3.3), and ERPT's chains must start there: a seed
+// of energy e = f^(x, u) w / p puts its chains at (x, u) in proportion to that. With r = f^ / f
+// (f from marching 1024 steps, whose bias is far below the test's resolution), the starts'
+// e min(1, 1 / r) then sums to the integral of f(x) E_q[min(r, 1)], which path tracing's paths
+// estimate independently, each weighted by min(r', 1) for a fresh estimate r' of its own; on the
+// paths through the grid, where r is not 1. A chain started with a fresh estimate instead sits
+// at (x, u') with u' drawn from q alone, off the target, and its starts sum to the integral of
+// f(x) E_q[min(1, 1 / r)] (the statistic is bounded, so that the heavy tail of 1 / r does not
+// hide the difference).
+TEST(GridSeedSampler, ChainsStartOnThePseudoMarginalTarget) {
+  RenderSettings settings;
+  settings.width = settings.height = 24;
+  auto scene = loadScene(kSmokyBox, settings);
+  const int maxDepth = scene->maxDepth() == 0 ? -1 : scene->maxDepth();
+  constexpr int kWalks = 400000;
+  std::vector<double> own(kWalks, 0.0), fresh(kWalks, 0.0), traced(kWalks, 0.0);
+  int starts = 0, ownFailures = 0, freshFailures = 0, tracedThrough = 0, unevaluated = 0;
+  {
+    GridSeedSampler sampler(*scene, maxDepth, 1, 0);
+    PathChain chain(*scene, maxDepth, MutationMix{}, 1, 0);
+    Rng rng(5, 2), chainRng(5, 3);
+    for (int i = 0; i < kWalks; ++i) {
+      const Vec2f film(rng.nextFloat() * 24, rng.nextFloat() * 24);
+      sampler.visit(film, rng, [&](const GridSeed& seed) {
+        if (!throughGrid(*scene, *seed.path)) return;
+        const PathContribution exact = seed.path->contribution(*scene, maxDepth);
+        ASSERT_TRUE(exact.carriesLight());
+        // A seed's own estimate carries light: its chain cannot fail to start.
+        if (!startAtSeed(chain, *seed.path, &seed.f, chainRng)) {
+          ++ownFailures;
+          return;
+        }
+        const double logR = chain.currentContribution().logLuminance - exact.logLuminance;
+        own[size_t(i)] += seed.energy * std::min(1.0, std::exp(-logR));
+        ++starts;
+        // The mutant, for comparison: the same seed started with a fresh estimate.
+        if (startAtSeed(chain, *seed.path, nullptr, chainRng))
+          fresh[size_t(i)] +=
+              seed.energy * std::min(1.0, std::exp(exact.logLuminance -
+                                                   chain.currentContribution().logLuminance));
+        else
+          ++freshFailures;
+      });
+    }
+  }
+  {
+    PathTracer tracer(*scene, maxDepth);
+    Rng rng(6, 2), estimateRng(6, 3);
+    IndependentSampler sampler(&rng);
+    const TransmittanceEstimator estimator{&estimateRng, 1, 0};
+    Path x;
+    for (int i = 0; i < kWalks; ++i) {
+      const Vec2f film(rng.nextFloat() * 24, rng.nextFloat() * 24);
+      tracer.visitPaths(film, sampler, [&](const PathTracer::TracedPath& path) {
+        x.vertices.clear();
+        if (path.light) x.vertices.push_back(*path.light);
+        x.vertices.insert(x.vertices.end(), path.camera, path.camera + path.count);
+        if (!throughGrid(*scene, x)) return;
+        const PathContribution exact = x.contribution(*scene, maxDepth);
+        const PathContribution estimate = x.contribution(*scene, maxDepth, &estimator);
+        if (!exact.carriesLight()) {
+          unevaluated += luminance(path.value) > 0;
+          return;
+        }
+        const double r =
+            estimate.carriesLight() ? std::exp(estimate.logLuminance - exact.logLuminance) : 0.0;
+        traced[size_t(i)] += luminance(path.value) * std::min(r, 1.0);
+        ++tracedThrough;
+      });
+    }
+  }
+  // Many paths pass through the grid, or the test would not tell.
+  EXPECT_GT(starts, kWalks / 5);
+  EXPECT_EQ(ownFailures, 0);
+  EXPECT_GT(tracedThrough, kWalks / 20);
+  EXPECT_LT(unevaluated, tracedThrough / 1000) << "paths that carry light but not by marching";
+  const MeanEstimate a = meanOfIndependent(own), f = meanOfIndependent(fresh),
+                     b = meanOfIndependent(traced);
+  std::printf(
+      "through the grid, over %d starts: seeds' own estimates %.4f +- %.4f, fresh ones %.4f +- "
+      "%.4f (%d failed to start); path tracing %.4f +- %.4f (%d paths)\n",
+      starts, a.mean, a.standardError, f.mean, f.standardError, freshFailures, b.mean,
+      b.standardError, tracedThrough);
+  std::printf("(%d paths carry light by path tracing but not by marching)\n", unevaluated);
+  EXPECT_NEAR(a.mean, b.mean, 4.5 * std::hypot(a.standardError, b.standardError));
 }
 
 }  // namespace
