@@ -162,16 +162,9 @@ TEST(ManifoldNextEvent, TakesOverWhatBdptCarriesUnderTheWaterCausticsWaves) {
       loadSceneDescription(std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml");
   d.strictNormals = false;
   int lights = 0;
-  for (ShapeDescription& shape : d.shapes) {
-    if (!shape.isEmitter) continue;
-    ++lights;
-    Vec3f centre(0.0f);
-    for (const Vec3f& p : shape.positions) centre += p;
-    centre = centre / float(shape.positions.size());
-    for (Vec3f& p : shape.positions) p = centre + (p - centre) * 200.0f;
-    shape.radiance = shape.radiance / 4e4f;
-  }
+  for (const ShapeDescription& shape : d.shapes) lights += shape.isEmitter;
   ASSERT_EQ(lights, 1);
+  widenAreaLights(d, 200.0f);
   Scene scene(d);
   expectTakesOverWhatBdptCarries(scene, 8, 1 << 20, 0.01, "water caustic under a wide light");
 }

@@ -453,14 +453,7 @@ std::shared_ptr<Scene> waterUnderAWideLight() {
   SceneDescription desc = loadSmall(kShared + "/scenes/water-caustic/scene.xml")->description();
   desc.maxDepth = 8;
   desc.strictNormals = false;
-  for (ShapeDescription& shape : desc.shapes) {
-    if (!shape.isEmitter) continue;
-    Vec3f centre(0.0f);
-    for (const Vec3f& p : shape.positions) centre += p;
-    centre = centre / float(shape.positions.size());
-    for (Vec3f& p : shape.positions) p = centre + (p - centre) * 200.0f;
-    shape.radiance = shape.radiance / 4e4f;
-  }
+  widenAreaLights(desc, 200.0f);
   return std::make_shared<Scene>(desc);
 }
 

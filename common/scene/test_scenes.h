@@ -172,4 +172,18 @@ inline std::string litBoxScene(const std::string& light) {
   return path;
 }
 
+// Every area light of d `factor` times wider and deeper about its centre, its radiance divided by
+// factor^2 so that it emits the same power: on the water caustic (200), BDPT's camera paths then
+// reach the light through the water often enough to converge on L S D S E too.
+inline void widenAreaLights(SceneDescription& d, float factor) {
+  for (ShapeDescription& shape : d.shapes) {
+    if (!shape.isEmitter) continue;
+    Vec3f centre(0.0f);
+    for (const Vec3f& p : shape.positions) centre += p;
+    centre = centre / float(shape.positions.size());
+    for (Vec3f& p : shape.positions) p = centre + (p - centre) * factor;
+    shape.radiance = shape.radiance / (factor * factor);
+  }
+}
+
 }  // namespace farm
