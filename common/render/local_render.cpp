@@ -14,35 +14,54 @@ LocalRenderResult renderLocally(const RenderJob& job) {
   std::vector<ChainSpec> specs = job.planChains(result.bootstrap);
   std::vector<double> sums(size_t(job.width()) * job.height() * 3, 0.0);
   result.chainTotals.assign(specs.size(), {0.0, 0.0, 0.0});
+  result.chainWork.assign(specs.size(), 0);
   std::mutex mutex;
   const double budget = job.settings().timeBudgetSeconds;
-  tbb::parallel_for(size_t(0), specs.size(), [&](size_t i) {
-    job.runChain(specs[i], [&](ChainFlush&& f) {
-      std::lock_guard<std::mutex> lock(mutex);
-      std::array<double, 3>& total = result.chainTotals[i];
-      for (size_t k = 0; k < sums.size(); ++k) {
-        sums[k] += f.splats[k];
-        total[k % 3] += f.splats[k];
-      }
-      for (const MutationTally& t : f.tallies) {
-        MutationTally& sum = result.tallies[t.name];
-        sum.name = t.name;
-        sum.proposed += t.proposed;
-        sum.accepted += t.accepted;
-      }
-      result.work += f.mutations;
-      result.rays += f.rays;
-      result.rejected += f.rejected;
-      if (budget > 0) {
-        double elapsed =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        return elapsed < budget;
-      }
-      return true;
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  // With a time budget the chains take turns, one flush each a round, as the coordinator
+  // time-slices them (Job::answerLocked): run to the deadline instead, the first chain on each
+  // thread would keep it until the time is up and the others would run one flush each after it,
+  // so that the image would be a few chains' (and their stopping time, which depends on where
+  // they went, would weigh their paths). Each turn resumes from the state its last flush left.
+  std::vector<char> finished(specs.size(), 0);  // not vector<bool>: written from many threads
+  for (bool timeUp = false; !timeUp;) {
+    tbb::parallel_for(size_t(0), specs.size(), [&](size_t i) {
+      if (finished[i] || (budget > 0 && elapsed() >= budget)) return;
+      ChainSpec& spec = specs[i];
+      job.runChain(spec, [&](ChainFlush&& f) {
+        std::lock_guard<std::mutex> lock(mutex);
+        std::array<double, 3>& total = result.chainTotals[i];
+        for (size_t k = 0; k < sums.size(); ++k) {
+          sums[k] += f.splats[k];
+          total[k % 3] += f.splats[k];
+        }
+        for (const MutationTally& t : f.tallies) {
+          MutationTally& sum = result.tallies[t.name];
+          sum.name = t.name;
+          sum.proposed += t.proposed;
+          sum.accepted += t.accepted;
+        }
+        result.work += f.mutations;
+        result.chainWork[i] += f.mutations;
+        result.rays += f.rays;
+        result.rejected += f.rejected;
+        spec.resumeState = std::move(f.state);
+        spec.resumeMutations += f.mutations;
+        spec.resumeFlushIndex = f.flushIndex + 1;
+        if (f.finished) finished[i] = 1;
+        return budget <= 0;  // with a budget: yield after one flush
+      });
+      if (budget <= 0) finished[i] = 1;
     });
-  });
+    timeUp = budget > 0 && elapsed() >= budget;
+    bool all = true;
+    for (char f : finished) all = all && f;
+    if (all) break;
+  }
   result.image = job.resolve(sums, job.imageScale(result.bootstrap, result.work));
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = elapsed();
   return result;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // Runs a whole RenderJob in this process (bootstrap, every chain on the TBB pool, sums in
 // double) with no coordinator: what the statistical tests and benchmarks of common/ use.
-// `farm render` goes through the coordinator core instead, with the same chains.
+// `farm render` goes through the coordinator core instead, with the same chains. Under a time
+// budget the chains take turns of one flush each, so that they advance evenly.
 #include <array>
 #include <cstdint>
 #include <map>
@@ -23,6 +24,7 @@ struct LocalRenderResult {
   // independent, so their spread between two renders measures the variance of sums over the
   // image even where one unit's splats spread over many pixels (MLT, ERPT).
   std::vector<std::array<double, 3>> chainTotals;
+  std::vector<int64_t> chainWork;                // per chain, mutations or samples
   std::map<std::string, MutationTally> tallies;  // proposals and acceptances by kind
 };
 
