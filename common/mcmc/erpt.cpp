@@ -112,9 +112,7 @@ void runErptTile(const Scene& scene, const ChainSpec& spec,
     } else {
       IndependentSampler sampler(&rng);
       tracer.visitPaths(seedFilm, sampler, [&](const PathTracer::TracedPath& seed) {
-        x.vertices.clear();
-        if (seed.light) x.vertices.push_back(*seed.light);
-        x.vertices.insert(x.vertices.end(), seed.camera, seed.camera + seed.count);
+        seed.assignTo(&x);
         redistribute(x, nullptr, seedFilm, seed.value);
       });
     }

@@ -160,9 +160,7 @@ TEST(GridSeedSampler, ChainsStartOnThePseudoMarginalTarget) {
     for (int i = 0; i < kWalks; ++i) {
       const Vec2f film(rng.nextFloat() * 24, rng.nextFloat() * 24);
       tracer.visitPaths(film, sampler, [&](const PathTracer::TracedPath& path) {
-        x.vertices.clear();
-        if (path.light) x.vertices.push_back(*path.light);
-        x.vertices.insert(x.vertices.end(), path.camera, path.camera + path.count);
+        path.assignTo(&x);
         if (!throughGrid(*scene, x)) return;
         const PathContribution exact = x.contribution(*scene, maxDepth);
         const PathContribution estimate = x.contribution(*scene, maxDepth, &estimator);

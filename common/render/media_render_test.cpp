@@ -148,8 +148,7 @@ TEST(MediaRender, PathTracingsRecordedPathsCarryTheirValuesColour) {
     tracer.visitPaths(film, sampler, [&](const PathTracer::TracedPath& seed) {
       if (!(luminance(seed.value) > 0)) return;
       Path x;
-      if (seed.light) x.vertices.push_back(*seed.light);
-      x.vertices.insert(x.vertices.end(), seed.camera, seed.camera + seed.count);
+      seed.assignTo(&x);
       const PathContribution f = x.contribution(*scene, maxDepth);
       ASSERT_TRUE(f.carriesLight()) << "path " << paths;
       const Spectrum colour = seed.value / luminance(seed.value);

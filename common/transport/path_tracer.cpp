@@ -260,6 +260,12 @@ Spectrum PathTracer::radiance(const Ray& primary, Sampler& sampler) const {
   return L;
 }
 
+void PathTracer::TracedPath::assignTo(Path* x) const {
+  x->vertices.clear();
+  if (light) x->vertices.push_back(*light);
+  x->vertices.insert(x->vertices.end(), camera, camera + count);
+}
+
 void PathTracer::visitPaths(const Vec2f& film, Sampler& sampler,
                             const std::function<void(const TracedPath&)>& visit) const {
   thread_local std::vector<PathVertex> vertices;

@@ -8,6 +8,7 @@
 #include "common/film/splat_buffer.h"
 #include "common/sampling/sampler.h"
 #include "common/scene/scene.h"
+#include "common/transport/path.h"
 #include "common/transport/path_vertex.h"
 
 namespace farm {
@@ -36,6 +37,9 @@ class PathTracer {
     const PathVertex* camera;  // camera[count - 1] is the camera
     int count;
     Spectrum value;
+    // The path in Path's order (the light's end first), into *x: what a chain seeded with this
+    // sample starts from.
+    void assignTo(Path* x) const;
   };
   void visitPaths(const Vec2f& film, Sampler& sampler,
                   const std::function<void(const TracedPath&)>& visit) const;
