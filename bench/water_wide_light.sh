@@ -5,7 +5,8 @@
 # paths reach the light through the water. Lax normals and 8 edges, as the reference's renderer
 # had them. Each algorithm renders once per seed; the table compares each with bdpt: channel
 # means, and the mean of each of BLOCKS x BLOCKS blocks of the film with a standard error from
-# the spread between seeds (few seeds: few degrees of freedom, read the z loosely).
+# the spread between seeds (few seeds: few degrees of freedom, read the z loosely), and the
+# same for three bands of rows (above the water, the surface seen from below, under the water).
 #   bench/water_wide_light.sh [SECONDS] [OUT] [SEEDS...]   (default 40 out/water-wide 1 2 3 4 5)
 # ALGS="mlt bdpt" (default) names what renders; bdpt must be among them. EXTRA="--chains 1024"
 # passes more options to every algorithm but bdpt, TAG (say "_c1024") names those runs. BLOCKS=8
@@ -86,4 +87,13 @@ for name, imgs in sorted(sets.items()):
     print("  z:")
     print(z)
     print(f"  chi2 / dof {(z ** 2).mean():.2f}, largest |z| {np.abs(z).max():.2f}")
+    # Bands of rows: the light and walls above the water, the surface seen from below, and
+    # what lies under the water (seen through its front), each as one luminance mean.
+    h = imgs[0].shape[0]
+    for band, (a, b) in {"above the water": (0, h // 4), "the surface": (h // 4, 3 * h // 8),
+                         "under the water": (3 * h // 8, h)}.items():
+        va = np.array([(i[a:b] @ w).mean() for i in imgs])
+        vb = np.array([(i[a:b] @ w).mean() for i in base])
+        print(f"  {band} (rows {a}-{b}): {(va.mean() / vb.mean() - 1) * 100:+.2f}%"
+              f" +- {np.hypot(se(va) / va.mean(), se(vb) / vb.mean()) * 100:.2f}%")
 EOF
