@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -197,6 +198,9 @@ struct ResampledTarget {
   Shares shares;
   std::vector<double> cumulative;  // running sum of the samples' totals
   uint64_t seed = 77;
+  // When given, the target is the paths it keeps alone: the strategies' paths it refuses are
+  // neither counted nor drawn.
+  std::function<bool(const Path&)> keep;
 };
 
 // Shares of bins from independent samples (perSample[sample][bin]): each bin's total over the
@@ -228,8 +232,10 @@ Shares ratioShares(const std::vector<std::vector<double>>& perSample, std::vecto
   return s;
 }
 
-ResampledTarget sampleTarget(const Scene& scene, int samples) {
+ResampledTarget sampleTarget(const Scene& scene, int samples,
+                             std::function<bool(const Path&)> keep = {}) {
   ResampledTarget target;
+  target.keep = std::move(keep);
   const int maxDepth = maxDepthOf(scene);
   const int blocks = kBlocks * kBlocks;
   std::vector<std::vector<double>> perSample(samples, std::vector<double>(blocks, 0.0));
@@ -237,8 +243,16 @@ ResampledTarget sampleTarget(const Scene& scene, int samples) {
     Rng rng(target.seed, uint64_t(i));
     IndependentSampler sampler(&rng);
     BidirectionalTracer tracer(scene, maxDepth);
+    const Vec2f film = primarySampleFilmPoint(scene.camera(), sampler);
+    if (target.keep) {
+      tracer.visitStrategies(film, sampler, [&](const BidirectionalTracer::StrategyPath& sp) {
+        if (!target.keep(Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t))) return;
+        perSample[i][size_t(blockOf(sp.film))] += luminance(sp.unweighted) * sp.weight;
+      });
+      return;
+    }
     std::vector<Splat> splats;
-    tracer.sample(primarySampleFilmPoint(scene.camera(), sampler), sampler, &splats);
+    tracer.sample(film, sampler, &splats);
     for (const Splat& s : splats) perSample[i][size_t(blockOf(s.film))] += luminance(s.value);
   });
   std::vector<double> totals;
@@ -266,6 +280,7 @@ Path drawSeed(const Scene& scene, const ResampledTarget& target, Rng& rng) {
         [&](const BidirectionalTracer::StrategyPath& sp) {
           Path x = Path::fromSubpaths(sp.light, sp.s, sp.camera, sp.t);
           if (!x.contribution(scene, maxDepth).carriesLight()) return;
+          if (target.keep && !target.keep(x)) return;
           paths.push_back(std::move(x));
           run.push_back((run.empty() ? 0 : run.back()) + luminance(sp.unweighted) * sp.weight);
         });
@@ -460,6 +475,28 @@ std::shared_ptr<Scene> waterUnderAWideLight() {
 TEST(MltChain, StationaryOverTheWaterUnderAWideLight) {
   auto scene = waterUnderAWideLight();
   expectEveryMutationStationary(*scene);
+}
+
+// The manifold perturbation alone, on the paths it applies to: the target restricted to them
+// (BDPT's strategies' paths that it applies to, by their MIS-weighted luminance), from which
+// the chains start and which they must keep, without the light seen directly that holds most
+// of the luminance above and leaves the blocks under the water few chains each. Measured at
+// this size (480 chains of 8000 steps, 20 s): the worst block 2.25 standard errors off (bound
+// 4.52), 1.1 with 1920 chains of 20000 steps; with the generalized geometry term left out of
+// the perturbation's density, 16.6, where the test of every mutation above sees 4.7. With the
+// mesh's normal derivative left out of the constraints' Jacobian the figures do not move at all
+// (the same 2.25 and 64.6% accepted): not yet understood (issue 7).
+TEST(MltChain, ManifoldPerturbationKeepsItsOwnPathsOverTheWater) {
+  auto scene = waterUnderAWideLight();
+  const MutationContext context{*scene, maxDepthOf(*scene)};
+  const ManifoldPerturbation manifold(context);
+  const int samples = 1 << 19, chains = 480, steps = 8000;
+  const ResampledTarget target =
+      sampleTarget(*scene, samples, [&](const Path& x) { return manifold.appliesTo(x); });
+  Shares none;
+  none.mean = target.shares.mean;
+  none.stdError.assign(none.mean.size(), 0.0);
+  expectStationary(*scene, target, none, MutationType::ManifoldPerturbation, chains, steps);
 }
 
 // --- The lens point ---------------------------------------------------------------------------
