@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <mutex>
 
@@ -20,15 +21,19 @@ LocalRenderResult renderLocally(const RenderJob& job) {
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
+  auto timeUp = [&] { return budget > 0 && elapsed() >= budget; };
   // With a time budget the chains take turns, one flush each a round, as the coordinator
   // time-slices them (Job::answerLocked): run to the deadline instead, the first chain on each
   // thread would keep it until the time is up and the others would run one flush each after it,
   // so that the image would be a few chains' (and their stopping time, which depends on where
   // they went, would weigh their paths). Each turn resumes from the state its last flush left.
   std::vector<char> finished(specs.size(), 0);  // not vector<bool>: written from many threads
-  for (bool timeUp = false; !timeUp;) {
+  auto allFinished = [&] {
+    return std::all_of(finished.begin(), finished.end(), [](char f) { return f != 0; });
+  };
+  while (!allFinished() && !timeUp()) {
     tbb::parallel_for(size_t(0), specs.size(), [&](size_t i) {
-      if (finished[i] || (budget > 0 && elapsed() >= budget)) return;
+      if (finished[i] || timeUp()) return;
       ChainSpec& spec = specs[i];
       job.runChain(spec, [&](ChainFlush&& f) {
         std::lock_guard<std::mutex> lock(mutex);
@@ -55,10 +60,6 @@ LocalRenderResult renderLocally(const RenderJob& job) {
       });
       if (budget <= 0) finished[i] = 1;
     });
-    timeUp = budget > 0 && elapsed() >= budget;
-    bool all = true;
-    for (char f : finished) all = all && f;
-    if (all) break;
   }
   result.image = job.resolve(sums, job.imageScale(result.bootstrap, result.work));
   result.seconds = elapsed();
