@@ -98,6 +98,8 @@ class Scene {
   bool escapes(const Vec3f& p, const Vec3f& ng, const Vec3f& w) const;
   // A ray leaving surface point p (geometric normal ng) in direction d, offset off the surface.
   Ray spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const;
+  // How far spawnRay moves a ray's start off the surface at p.
+  float offsetFor(const Vec3f& p) const;
 
   // Triangles of a mesh shape (1 for a sphere): the range of a path vertex's primitive.
   int primitiveCount(int shape) const;
@@ -210,7 +212,6 @@ class Scene {
   Spectrum transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end, const Vec3f* rayEnd,
                               int medium, Sampler& sampler, SampleStream stream) const;
 
-  float offsetFor(const Vec3f& p) const;
   // The ends of the segment p0 - p1 moved off their surfaces (n = 0: a point, not moved), each
   // to the side the segment leaves it by: where visibility and transmittance rays run between.
   void offsetEnds(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1, Vec3f* o,
