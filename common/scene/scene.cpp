@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include "common/sampling/warp.h"
 
@@ -48,6 +50,39 @@ bool triangleNormals(const ShapeDescription& s, uint32_t prim, float w0, float w
   }
   *ngOut = s.flipNormals ? -ng : ng;
   *nsOut = s.flipNormals ? -ns : ns;
+  return true;
+}
+
+// Whether the mesh's shading normal is continuous: wherever corners of its triangles meet
+// (vertices shared, or apart at one position, as a flat-shaded export splits them), their
+// shading normals (triangleNormals at the corner) agree to within about half a degree.
+bool continuousShading(const ShapeDescription& s) {
+  struct Key {
+    float x, y, z;
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      uint32_t b[3];
+      std::memcpy(b, &k, sizeof(b));
+      return size_t(b[0]) * 73856093u ^ size_t(b[1]) * 19349663u ^ size_t(b[2]) * 83492791u;
+    }
+  };
+  std::unordered_map<Key, Vec3f, Hash> normalAt;
+  normalAt.reserve(s.positions.size());
+  const float weights[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (uint32_t t = 0; t < s.indices.size() / 3; ++t) {
+    for (int corner = 0; corner < 3; ++corner) {
+      Vec3f ng, ns;
+      if (!triangleNormals(s, t, weights[corner][0], weights[corner][1], weights[corner][2], &ng,
+                           &ns))
+        break;  // a degenerate triangle meets nothing
+      const Vec3f& p = s.positions[s.indices[3 * size_t(t) + size_t(corner)]];
+      // (+ 0: minus zero is zero, and must hash as zero does)
+      const auto [it, inserted] = normalAt.emplace(Key{p.x + 0.0f, p.y + 0.0f, p.z + 0.0f}, ns);
+      if (!inserted && dot(it->second, ns) < 0.99996f) return false;  // cos 0.5 degrees
+    }
+  }
   return true;
 }
 
@@ -191,9 +226,12 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
   }
   // Specular surfaces by area (a sphere as one entry).
   double specularArea = 0;
+  smoothSpecular_.assign(size_t(n), 0);
   for (int i = 0; i < n; ++i) {
     if (!bsdfs_[size_t(shapeBsdf_[i])].isDelta()) continue;
     const ShapeDescription& s = desc_.shapes[size_t(i)];
+    smoothSpecular_[size_t(i)] =
+        s.type == ShapeDescription::Type::Sphere || continuousShading(s) ? 1 : 0;
     if (s.type == ShapeDescription::Type::Sphere) {
       specularArea += 4 * kPi * double(s.radius) * s.radius;
       specularCdf_.push_back(specularArea);

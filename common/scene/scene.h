@@ -114,6 +114,16 @@ class Scene {
   // vertex. False when the scene has no specular surface.
   bool hasSpecularSurfaces() const { return !specularCdf_.empty(); }
   bool sampleSpecularSurface(const float u[3], Vec3f* p, Vec3f* n) const;
+  // Whether specular shape `shape` is one smooth specular manifold: its shading normal turns
+  // continuously over it (a sphere; a mesh whose triangles give one normal wherever their
+  // corners meet, by interpolated vertex normals or by lying in one plane). Over a faceted
+  // one (flat-shaded and curved: the water caustic's mesh with face normals) the normal jumps at
+  // every edge, so each facet reflects a light into a point at most once and a manifold walk
+  // reaches that solution only from a seed on its own facet: manifold next-event estimation's
+  // trials would run into the ten thousands. False for a shape that is not specular.
+  bool smoothSpecularShape(int shape) const {
+    return shape >= 0 && size_t(shape) < smoothSpecular_.size() && smoothSpecular_[size_t(shape)];
+  }
 
   // The shape's BSDF as its description gives it: what does not depend on textures (its type,
   // its Dirac lobes) may be read here.
@@ -225,6 +235,7 @@ class Scene {
   // Specular surfaces by area: the running total up to each (shape, triangle) entry.
   std::vector<double> specularCdf_;
   std::vector<std::pair<int, uint32_t>> specularPrimitives_;
+  std::vector<char> smoothSpecular_;  // per shape, see smoothSpecularShape
   std::vector<AreaLight> lights_;
   std::vector<double> lightCdf_;
   float extent_ = 1;

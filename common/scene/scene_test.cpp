@@ -9,6 +9,7 @@
 
 #include "common/sampling/rng.h"
 #include "common/sampling/warp.h"
+#include "common/scene/loaders/scene_loader.h"
 #include "common/scene/stiff_scenes.h"
 #include "common/scene/test_scenes.h"
 
@@ -112,6 +113,89 @@ TEST(Scene, TransmittanceThroughClearMediaIsVisibility) {
   }
   EXPECT_GT(visibleCount, n / 2);
   EXPECT_EQ(mismatches, 0);
+}
+
+// An octahedron about the origin, radius 1: shared vertices (six), or split (three a face, as a
+// flat-shaded export writes it); vertex normals none, the corners' directions (smooth), or each
+// face's own (faceted however the vertices lie).
+ShapeDescription octahedron(bool split, int normals, int bsdf) {
+  const Vec3f v[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const uint32_t faces[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  ShapeDescription s;
+  s.bsdf = bsdf;
+  if (!split) {
+    for (const Vec3f& p : v) s.positions.push_back(p), s.normals.push_back(normalize(p));
+    for (const auto& f : faces) s.indices.insert(s.indices.end(), f, f + 3);
+    s.faceNormals = normals == 2;
+  } else {
+    for (const auto& f : faces) {
+      const Vec3f faceNormal = normalize(cross(v[f[1]] - v[f[0]], v[f[2]] - v[f[0]]));
+      for (uint32_t c : f) {
+        s.indices.push_back(uint32_t(s.positions.size()));
+        s.positions.push_back(v[c]);
+        s.normals.push_back(normals == 2 ? faceNormal : normalize(v[c]));
+      }
+    }
+  }
+  if (normals == 0) s.normals.clear();
+  return s;
+}
+
+// Scene::smoothSpecularShape, where manifold next-event estimation may walk (its paths through
+// the others stay with BDPT): a sphere, a plane and a smooth-shaded mesh are smooth whether or
+// not a flat-shaded export split their vertices; a curved mesh with its faces' normals is not,
+// nor is anything diffuse. And the water caustic's waves: smooth with their vertex normals (all
+// vertical there), faceted with face normals; its flat front face smooth either way.
+TEST(Scene, SmoothSpecularShapesAreTheOnesWithoutCreases) {
+  SceneDescription d = whiteFurnace(0.5f, 4);
+  BsdfDescription glass;
+  glass.type = BsdfDescription::Type::Dielectric;
+  d.bsdfs.push_back(glass);
+  const int g = int(d.bsdfs.size()) - 1;
+  struct Case {
+    const char* name;
+    ShapeDescription shape;
+    bool smooth;
+  };
+  const Case cases[] = {
+      {"sphere", sphereShape(Vec3f(0.0f), 0.5f, g), true},
+      {"quad", quadShape(Vec3f(-1, -1, 0.5f), Vec3f(2, 0, 0), Vec3f(0, 2, 0), g), true},
+      {"diffuse quad", quadShape(Vec3f(-1, -1, 0.5f), Vec3f(2, 0, 0), Vec3f(0, 2, 0), 0), false},
+      {"octahedron, face normals", octahedron(false, 0, g), false},
+      {"octahedron, face normals forced", octahedron(false, 2, g), false},
+      {"octahedron, vertex normals", octahedron(false, 1, g), true},
+      {"split octahedron, no normals", octahedron(true, 0, g), false},
+      {"split octahedron, smooth normals", octahedron(true, 1, g), true},
+      {"split octahedron, faces' normals", octahedron(true, 2, g), false},
+  };
+  for (const Case& c : cases) {
+    SceneDescription one = d;
+    one.shapes.push_back(c.shape);
+    Scene scene(one);
+    EXPECT_FALSE(scene.smoothSpecularShape(0)) << "the diffuse furnace";
+    EXPECT_EQ(scene.smoothSpecularShape(1), c.smooth) << c.name;
+  }
+
+  SceneDescription water =
+      loadSceneDescription(std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml");
+  int waves = -1, front = -1;
+  for (int i = 0; i < int(water.shapes.size()); ++i) {
+    const ShapeDescription& s = water.shapes[size_t(i)];
+    if (s.faceNormals && !s.indices.empty()) front = i;
+    if (!s.normals.empty() && !s.faceNormals) waves = i;
+  }
+  ASSERT_GE(waves, 0);
+  ASSERT_GE(front, 0);
+  {
+    Scene scene(water);
+    EXPECT_TRUE(scene.smoothSpecularShape(waves));
+    EXPECT_TRUE(scene.smoothSpecularShape(front));
+  }
+  water.shapes[size_t(waves)].faceNormals = true;
+  Scene faceted(water);
+  EXPECT_FALSE(faceted.smoothSpecularShape(waves));
+  EXPECT_TRUE(faceted.smoothSpecularShape(front));
 }
 
 }  // namespace
