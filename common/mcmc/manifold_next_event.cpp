@@ -38,10 +38,16 @@ ManifoldNextEvent::ManifoldNextEvent(const Scene& scene, int maxDepth)
     : scene_(scene),
       maxDepth_(maxDepth),
       maxLength_(maxDepth > 0 ? maxDepth : kUnboundedLength),
-      context_{scene, maxDepth} {}
+      context_{scene, maxDepth} {
+  // Where every specular shape is faceted, covers() takes no path.
+  bool smooth = false;
+  for (int i = 0; i < int(scene.description().shapes.size()); ++i)
+    smooth |= scene.smoothSpecularShape(i);
+  active_ = smooth && !scene.lights().empty() && maxLength_ >= 3;
+}
 
 bool ManifoldNextEvent::active() const {
-  return scene_.hasSpecularSurfaces() && !scene_.lights().empty() && maxLength_ >= 3;
+  return active_;
 }
 
 bool ManifoldNextEvent::covers(const Path& x) const {
@@ -55,6 +61,12 @@ bool ManifoldNextEvent::covers(const Path& x) const {
   if (j < 1 || j > kMaxSpecularVertices || x[j + 1].kind != PathVertex::Kind::Surface ||
       x.isSpecular(scene_, j + 1))
     return false;
+  // Chains over a faceted specular shape stay with BDPT: each facet holds its own solution,
+  // which a walk finds only from a seed on that facet, so that the trials until it recurs would
+  // often pass their cap (a bias) and cost tens of thousands of walks where they do not.
+  for (int i = 1; i <= j; ++i) {
+    if (!scene_.smoothSpecularShape(x[i].shape)) return false;
+  }
   // Through one specular vertex, always; through more, only where the diffuse vertex is seen
   // through a specular one too (L S S D S ..), which BDPT builds only by hitting the light: where
   // it is seen from a diffuse vertex or the camera, BDPT's light subpaths join it well, while

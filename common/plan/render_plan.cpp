@@ -170,11 +170,25 @@ void RenderPlan::choose(Algorithm chosen) {
   mutation("manifold perturbation", mutationMix.manifoldPerturbation,
            "no specular chain for a manifold walk");
 
-  PlanPart manifoldNee{"manifold next-event estimation", s.hasSpecular() && !s.lights.empty(), ""};
-  manifoldNee.reason = manifoldNee.enabled
-                           ? "the bootstrap connects diffuse vertices to lights through "
-                             "single specular vertices"
-                           : noSpecular + ": the bootstrap never searches a specular vertex";
+  // ManifoldNextEvent::active and covers: smooth specular shapes only.
+  const int smoothSpecular = s.specularShapes - s.facetedSpecularShapes;
+  PlanPart manifoldNee{"manifold next-event estimation", smoothSpecular > 0 && !s.lights.empty(),
+                       ""};
+  if (manifoldNee.enabled) {
+    manifoldNee.reason =
+        "the bootstrap connects diffuse vertices to lights through single specular vertices";
+    if (s.facetedSpecularShapes > 0)
+      manifoldNee.reason += "; paths over faceted specular shapes (" +
+                            std::to_string(s.facetedSpecularShapes) +
+                            " here: flat-shaded and curved, every facet a solution of its own) "
+                            "stay with BDPT's strategies";
+  } else if (s.hasSpecular() && !s.lights.empty()) {
+    manifoldNee.reason =
+        "every specular shape is faceted (flat-shaded and curved): each facet holds its own "
+        "solution, which a manifold walk finds only from a seed on it; BDPT keeps these paths";
+  } else {
+    manifoldNee.reason = noSpecular + ": the bootstrap never searches a specular vertex";
+  }
   if (manifoldNee.enabled && !needsBootstrap(algorithm)) {
     manifoldNee.enabled = false;
     manifoldNee.reason = std::string(algorithmName(algorithm)) + " has no bootstrap";

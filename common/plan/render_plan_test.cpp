@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/render/render_job.h"
+#include "common/scene/loaders/scene_loader.h"
 #include "common/scene/scene.h"
 
 namespace farm {
@@ -129,7 +130,31 @@ TEST(RenderPlan, WaterCausticIsSpecularDiffuseSpecularAndOnlyMltMayRenderIt) {
   EXPECT_TRUE(part(p, "manifold next-event estimation").enabled);
   EXPECT_TRUE(part(p, "seen emission apart").enabled);
   EXPECT_EQ(p.mutationMix, MutationMix());
+  EXPECT_EQ(p.scene.facetedSpecularShapes, 0);
   expectNamedLeftOuts(p, path);
+
+  // With face normals its waves are faceted: manifold next-event estimation keeps to the flat
+  // front face and says that BDPT keeps the waves' paths (ManifoldNextEvent::covers).
+  SceneDescription d = loadSceneDescription(path);
+  for (ShapeDescription& shape : d.shapes) shape.faceNormals = true;
+  const RenderPlan faceted =
+      planRender(analyseScene(Scene(d)), Algorithm::PSSMLT, true, MutationMix());
+  EXPECT_EQ(faceted.scene.facetedSpecularShapes, 1);
+  const PlanPart& nee = part(faceted, "manifold next-event estimation");
+  EXPECT_TRUE(nee.enabled);
+  EXPECT_NE(nee.reason.find("faceted specular shapes (1 here"), std::string::npos) << nee.reason;
+  // Every specular shape faceted: none is left to it.
+  SceneDescription onlyWaves = d;
+  for (ShapeDescription& shape : onlyWaves.shapes) {
+    if (shape.normals.empty() && shape.bsdf >= 0 &&
+        onlyWaves.bsdfs[size_t(shape.bsdf)].type == BsdfDescription::Type::Dielectric)
+      shape.bsdf = 0;  // the flat front face made diffuse
+  }
+  const RenderPlan wavesOnly =
+      planRender(analyseScene(Scene(onlyWaves)), Algorithm::PSSMLT, true, MutationMix());
+  const PlanPart& none = part(wavesOnly, "manifold next-event estimation");
+  EXPECT_FALSE(none.enabled);
+  EXPECT_NE(none.reason.find("every specular shape is faceted"), std::string::npos) << none.reason;
 }
 
 // A little of its light comes through the glass egg from the small lamp and is seen through

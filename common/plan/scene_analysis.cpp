@@ -129,6 +129,7 @@ SceneAnalysis analyseScene(const Scene& scene) {
     if (scene.bsdfOf(int(i)).isDelta()) {
       ++a.specularShapes;
       a.specularArea += area;
+      a.facetedSpecularShapes += !scene.smoothSpecularShape(int(i));
     } else if (b.type != T::Diffuse && b.alpha <= kGlossyAlpha) {
       ++a.glossyShapes;
       a.glossyArea += area;

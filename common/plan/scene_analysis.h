@@ -39,6 +39,8 @@ struct SceneAnalysis {
   // only: smooth dielectric and conductor), glossy (microfacet lobes of alpha <= kGlossyAlpha),
   // diffuse (Lambertian, or rougher lobes).
   int specularShapes = 0, glossyShapes = 0, diffuseShapes = 0;
+  // Specular shapes that are faceted (Scene::smoothSpecularShape false): flat-shaded and curved.
+  int facetedSpecularShapes = 0;
   double specularArea = 0, glossyArea = 0, diffuseArea = 0;
   std::vector<LightSummary> lights;
   bool smallLights = false;  // every light is small (kSmallLight) or a point
