@@ -181,7 +181,8 @@ void RenderPlan::choose(Algorithm chosen) {
       manifoldNee.reason += "; paths over faceted specular shapes (" +
                             std::to_string(s.facetedSpecularShapes) +
                             " here: flat-shaded and curved, every facet a solution of its own) "
-                            "stay with BDPT's strategies";
+                            "stay with BDPT's strategies, which under a small light find them "
+                            "slowly (smooth vertex normals avoid it)";
   } else if (s.hasSpecular() && !s.lights.empty()) {
     manifoldNee.reason =
         "every specular shape is faceted (flat-shaded and curved): each facet holds its own "
