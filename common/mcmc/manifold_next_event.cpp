@@ -38,16 +38,11 @@ ManifoldNextEvent::ManifoldNextEvent(const Scene& scene, int maxDepth)
     : scene_(scene),
       maxDepth_(maxDepth),
       maxLength_(maxDepth > 0 ? maxDepth : kUnboundedLength),
-      context_{scene, maxDepth} {
-  // Where every specular shape is faceted, covers() takes no path.
-  bool smooth = false;
-  for (int i = 0; i < int(scene.description().shapes.size()); ++i)
-    smooth |= scene.smoothSpecularShape(i);
-  active_ = smooth && !scene.lights().empty() && maxLength_ >= 3;
-}
+      context_{scene, maxDepth} {}
 
 bool ManifoldNextEvent::active() const {
-  return active_;
+  // Where every specular shape is faceted, covers() takes no path.
+  return scene_.hasSmoothSpecularShape() && !scene_.lights().empty() && maxLength_ >= 3;
 }
 
 bool ManifoldNextEvent::covers(const Path& x) const {

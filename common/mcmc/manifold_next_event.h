@@ -66,7 +66,6 @@ class ManifoldNextEvent {
   const Scene& scene_;
   int maxDepth_, maxLength_;
   MutationContext context_;
-  bool active_ = false;
   mutable uint64_t abandoned_ = 0;
 };
 

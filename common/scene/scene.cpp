@@ -232,6 +232,7 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
     const ShapeDescription& s = desc_.shapes[size_t(i)];
     smoothSpecular_[size_t(i)] =
         s.type == ShapeDescription::Type::Sphere || continuousShading(s) ? 1 : 0;
+    anySmoothSpecular_ |= smoothSpecular_[size_t(i)] != 0;
     if (s.type == ShapeDescription::Type::Sphere) {
       specularArea += 4 * kPi * double(s.radius) * s.radius;
       specularCdf_.push_back(specularArea);

@@ -124,6 +124,8 @@ class Scene {
   bool smoothSpecularShape(int shape) const {
     return shape >= 0 && size_t(shape) < smoothSpecular_.size() && smoothSpecular_[size_t(shape)];
   }
+  // Whether any shape is (smoothSpecularShape).
+  bool hasSmoothSpecularShape() const { return anySmoothSpecular_; }
 
   // The shape's BSDF as its description gives it: what does not depend on textures (its type,
   // its Dirac lobes) may be read here.
@@ -236,6 +238,7 @@ class Scene {
   std::vector<double> specularCdf_;
   std::vector<std::pair<int, uint32_t>> specularPrimitives_;
   std::vector<char> smoothSpecular_;  // per shape, see smoothSpecularShape
+  bool anySmoothSpecular_ = false;
   std::vector<AreaLight> lights_;
   std::vector<double> lightCdf_;
   float extent_ = 1;

@@ -175,6 +175,7 @@ TEST(Scene, SmoothSpecularShapesAreTheOnesWithoutCreases) {
     Scene scene(one);
     EXPECT_FALSE(scene.smoothSpecularShape(0)) << "the diffuse furnace";
     EXPECT_EQ(scene.smoothSpecularShape(1), c.smooth) << c.name;
+    EXPECT_EQ(scene.hasSmoothSpecularShape(), c.smooth) << c.name;
   }
 
   SceneDescription water =
