@@ -250,9 +250,10 @@ TEST(Reference, VeachBidirEnergyRedistribution) {
 // That mlt lies about 1% below what the reference's bias explains is not resolved. Z is not the
 // cause: manifold next-event estimation, which carries 78% of Z here, agrees with BDPT wherever
 // BDPT converges (manifold_next_event_test.cpp, to 0.6%), and the image sums to Z within 0.13%.
-// The chains with manifold walks are: with the light 200 times wider, where BDPT converges
-// everywhere, they put 1-6% less than BDPT under the water and more above it, and without the
-// manifold perturbation they agree (bench/water_wide_light.sh; README). The reference's bias
+// Whether the chains with manifold walks are is open: with the light 200 times wider, where BDPT
+// converges everywhere, sets of 10-16 renders put 2-3% less than BDPT under the water, but 32
+// renders, timed or at a fixed budget, put 0.8% +- 0.5% and 0.3% +- 0.7% less
+// (bench/water_wide_light.sh; README). The reference's bias
 // is not the same everywhere either: on the back wall above the water Tungsten's BDPT and ours
 // agree within 0.04% and the reference lies 4.0% above both (0.5% on the ceiling). Before rays
 // inside a specular chain ran along the bounce's own line (mutation.cpp's traceRay), held chains
