@@ -191,7 +191,7 @@ TEST(ManifoldNextEvent, TakesOverWhatBdptCarriesUnderTheWaterCausticsWaves) {
 // into their cap of 10^4: 88000 +- 5100 on the covered paths against BDPT's 108700 +- 1300 at
 // 2^18 samples; at this test's 2^20, Z came out 134400 +- 3200 against BDPT's 147600 +- 700
 // (9% low, 4.0 standard errors: within the bound, so the count of covered paths over the waves
-// is what fails then). Without it: 147800 +- 700.
+// is what fails then). With the waves left to BDPT: 147800 +- 700.
 TEST(ManifoldNextEvent, LeavesTheFacetedWavesToBdpt) {
   SceneDescription d =
       loadSceneDescription(std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml");
