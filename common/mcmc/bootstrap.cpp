@@ -92,6 +92,14 @@ bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t inde
   return false;
 }
 
+void visitCandidateSplats(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
+                          const std::function<void(const Splat&)>& visit) {
+  visitPathSpaceCandidate(scene, maxDepth, seed, index, [&](Path&& x, double share) {
+    const PathContribution c = x.contribution(scene, maxDepth);
+    if (c.carriesLight()) visit({c.film, c.color * float(share)});
+  });
+}
+
 BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, int maxDepth,
                                        uint64_t seed, int64_t count,
                                        const std::function<bool(double)>& progress) {

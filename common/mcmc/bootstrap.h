@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/chain/algorithm.h"
+#include "common/film/splat_buffer.h"
 #include "common/scene/scene.h"
 #include "common/transport/path.h"
 
@@ -39,6 +40,15 @@ double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, 
 // of I gives paths distributed as the luminance of f (Veach 1997, 11.3). False when none does.
 bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t index, double u,
                    Path* path);
+
+// Candidate `index`'s paths (mlt), as candidatePath() draws from them, each as the splat a chain
+// makes for it: at its film point, with f's colour and the share of I the path carries as its
+// luminance. Summed over candidates and divided by their count, they are an image of the chains'
+// target (its total Z; no lights seen directly where SeenEmission separates them) that shares
+// nothing with the chains' mutations: a check of where mlt's chains put the light, on scenes
+// where BDPT alone would not converge (the water caustic under its small light).
+void visitCandidateSplats(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
+                          const std::function<void(const Splat&)>& visit);
 
 // Generates `count` candidates in parallel. `progress` receives the fraction done and may return
 // false to cancel (then the result is empty).

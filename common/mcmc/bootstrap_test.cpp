@@ -1,5 +1,6 @@
 // Seed resampling: every pick carries light, and picks follow the weights (systematic
-// resampling gives each candidate floor or ceil of n w_i / W picks).
+// resampling gives each candidate floor or ceil of n w_i / W picks). A candidate's splats carry
+// its I.
 #include "common/mcmc/bootstrap.h"
 
 #include <gtest/gtest.h>
@@ -8,7 +9,9 @@
 #include <limits>
 #include <vector>
 
+#include "common/render/render_job.h"
 #include "common/sampling/rng.h"
+#include "common/scene/test_scenes.h"
 
 namespace farm {
 namespace {
@@ -63,6 +66,29 @@ TEST(ResampleSeeds, PicksFollowTheWeights) {
   }
   EXPECT_TRUE(resampleSeeds({0.0, 0.0}, 4, 1).empty());
   EXPECT_TRUE(resampleSeeds({}, 4, 1).empty());
+}
+
+// Each candidate's splats (the glass ball: BDPT's paths and manifold next-event estimation's)
+// land on the film and their luminance adds up to its I, so that their average is an image
+// whose total is Z: the image the water caustic's reference test holds mlt's chains to.
+TEST(CandidateSplats, AddUpToEachCandidatesContribution) {
+  RenderSettings settings;
+  settings.width = settings.height = 24;
+  auto scene = loadScene(glassBallScene(), settings);
+  const int maxDepth = 8;
+  int carrying = 0;
+  for (int64_t i = 0; i < 2048; ++i) {
+    double sum = 0;
+    visitCandidateSplats(*scene, maxDepth, 5, i, [&](const Splat& s) {
+      EXPECT_TRUE(s.film.x >= 0 && s.film.x < 24 && s.film.y >= 0 && s.film.y < 24)
+          << s.film.x << ", " << s.film.y;
+      sum += luminance(s.value);
+    });
+    const double I = evaluateCandidate(*scene, Algorithm::MLT, maxDepth, 5, i);
+    EXPECT_NEAR(sum, I, 1e-5 * I) << "candidate " << i;
+    if (I > 0) ++carrying;
+  }
+  EXPECT_GT(carrying, 1000);
 }
 
 }  // namespace
