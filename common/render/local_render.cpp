@@ -14,6 +14,10 @@ LocalRenderResult renderLocally(const RenderJob& job) {
   result.bootstrap = job.bootstrap();
   std::vector<ChainSpec> specs = job.planChains(result.bootstrap);
   std::vector<double> sums(size_t(job.width()) * job.height() * 3, 0.0);
+  uint32_t groups = 0;
+  for (const ChainSpec& spec : specs) groups = std::max(groups, spec.errorGroup + 1);
+  std::vector<std::vector<double>> groupSums(groups, std::vector<double>(sums.size(), 0.0));
+  std::vector<int64_t> groupWork(groups, 0);
   result.chainTotals.assign(specs.size(), {0.0, 0.0, 0.0});
   result.chainWork.assign(specs.size(), 0);
   std::mutex mutex;
@@ -38,10 +42,13 @@ LocalRenderResult renderLocally(const RenderJob& job) {
       job.runChain(spec, [&](ChainFlush&& f) {
         std::lock_guard<std::mutex> lock(mutex);
         std::array<double, 3>& total = result.chainTotals[i];
+        std::vector<double>& groupSum = groupSums[spec.errorGroup];
         for (size_t k = 0; k < sums.size(); ++k) {
           sums[k] += f.splats[k];
+          groupSum[k] += f.splats[k];
           total[k % 3] += f.splats[k];
         }
+        groupWork[spec.errorGroup] += f.mutations;
         for (const MutationTally& t : f.tallies) {
           MutationTally& sum = result.tallies[t.name];
           sum.name = t.name;
@@ -62,6 +69,9 @@ LocalRenderResult renderLocally(const RenderJob& job) {
     });
   }
   result.image = job.resolve(sums, job.imageScale(result.bootstrap, result.work));
+  for (uint32_t g = 0; g < groups; ++g)
+    result.groupImages.push_back(
+        job.resolve(groupSums[g], job.imageScale(result.bootstrap, groupWork[g])));
   result.seconds = elapsed();
   return result;
 }

@@ -24,7 +24,12 @@ struct LocalRenderResult {
   // independent, so their spread between two renders measures the variance of sums over the
   // image even where one unit's splats spread over many pixels (MLT, ERPT).
   std::vector<std::array<double, 3>> chainTotals;
-  std::vector<int64_t> chainWork;                // per chain, mutations or samples
+  std::vector<int64_t> chainWork;  // per chain, mutations or samples
+  // Per error group (ChainSpec::errorGroup), the image of its chains alone (their splats at the
+  // image's scale for their own work): independent estimates of the image but for the
+  // bootstrap's Z, which they share, so that their spread gives the standard error of the
+  // image's sum over any region.
+  std::vector<Image> groupImages;
   std::map<std::string, MutationTally> tallies;  // proposals and acceptances by kind
 };
 
