@@ -12,13 +12,17 @@
 //    reference's own noise (4096 samples per pixel) and the fluctuation of this heavy-tailed
 //    sum; a bias (a mirrored image, a missing strategy, a wrong Jacobian) exceeds it many times.
 #include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "common/film/error_metrics.h"
 #include "common/film/image.h"
+#include "common/film/splat_buffer.h"
+#include "common/mcmc/bootstrap.h"
 #include "common/render/local_render.h"
 #include "common/scene/scene.h"
 
@@ -217,6 +221,55 @@ TEST(Reference, VeachBidirEnergyRedistribution) {
   expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::ERPT, 2});
 }
 
+// The image the bootstrap's candidates make by themselves (visitCandidateSplats: BDPT, with
+// manifold next-event estimation in place of the strategies it covers), as `groups` images of
+// every groups-th candidate of `count`: an estimate of mlt's image (but for the lights seen
+// directly) that shares none of the chains' mutations.
+std::vector<Image> candidateImages(const RenderJob& job, const Scene& scene, int maxDepth,
+                                   uint64_t seed, int64_t count, int groups) {
+  std::vector<Image> images(static_cast<size_t>(groups));
+  const PixelFilter filter = PixelFilter::of(scene.description().camera);
+  tbb::parallel_for(0, groups, [&](int g) {
+    SplatBuffer film(job.width(), job.height(), filter);
+    int64_t n = 0;
+    for (int64_t i = g; i < count; i += groups, ++n) {
+      visitCandidateSplats(scene, maxDepth, seed, i,
+                           [&](const Splat& splat) { film.add(splat.film, splat.value); });
+    }
+    images[size_t(g)] = job.resolve(film.data(), 1.0 / double(n));
+  });
+  return images;
+}
+
+// The mean over independent images of each channel's sum over rows [y0, y1) where `use` is
+// set, and its standard error from their spread.
+struct BandMeans {
+  double mean[3] = {0, 0, 0}, stdError[3] = {0, 0, 0};
+};
+BandMeans bandMeans(const std::vector<Image>& images, const std::vector<char>& use, int y0,
+                    int y1) {
+  BandMeans b;
+  double sumSq[3] = {0, 0, 0};
+  for (const Image& image : images) {
+    double sum[3] = {0, 0, 0};
+    for (int y = y0; y < y1; ++y) {
+      for (int x = 0; x < image.width; ++x) {
+        const size_t p = size_t(y) * size_t(image.width) + size_t(x);
+        if (!use[p]) continue;
+        for (int ch = 0; ch < 3; ++ch) sum[ch] += image.rgb[3 * p + size_t(ch)];
+      }
+    }
+    for (int ch = 0; ch < 3; ++ch) b.mean[ch] += sum[ch], sumSq[ch] += sum[ch] * sum[ch];
+  }
+  const double n = double(images.size());
+  for (int ch = 0; ch < 3; ++ch) {
+    b.mean[ch] /= n;
+    if (n > 1)
+      b.stdError[ch] = std::sqrt(std::max(0.0, sumSq[ch] / n - b.mean[ch] * b.mean[ch]) / (n - 1));
+  }
+  return b;
+}
+
 // The water caustic (../shared/scenes/water-caustic): everything under the water is seen
 // through its wavy surface and lit through it by a light a fifth of a pixel across (L S D S E),
 // which path tracing, BDPT and the primary-sample chains leave far too dark. Path-space MLT with
@@ -247,17 +300,31 @@ TEST(Reference, VeachBidirEnergyRedistribution) {
 // Four renders: one render's blue mean spreads by 1.2-1.4% (seeds 11-16), so two leave 1% of spread
 // beside a margin of about that. Measured, seeds 11-14 averaged: unclipped 2.2%, 1.8% and 1.3%
 // below the reference, capped 2.4%, 2.0% and 1.4% below (1.6%, 1.2% and 0.8% from 1 - 0.6%).
-// That mlt lies about 1% below what the reference's bias explains is not resolved. Z is not the
-// cause: manifold next-event estimation, which carries 78% of Z here, agrees with BDPT wherever
-// BDPT converges (manifold_next_event_test.cpp, to 0.6%), and the image sums to Z within 0.13%.
-// Whether the chains with manifold walks are is open: with the light 200 times wider, where BDPT
-// converges everywhere, sets of 10-16 renders put 2-3% less than BDPT under the water, but 32
-// renders, timed or at a fixed budget, put 0.8% +- 0.5% and 0.3% +- 0.7% less
-// (bench/water_wide_light.sh; README). The reference's bias
-// is not the same everywhere either: on the back wall above the water Tungsten's BDPT and ours
-// agree within 0.04% and the reference lies 4.0% above both (0.5% on the ceiling). Before rays
-// inside a specular chain ran along the bounce's own line (mutation.cpp's traceRay), held chains
-// left the capped means of seeds 11-14 3.1%, 2.5% and 3.1% low and the test failed.
+// Before rays inside a specular chain ran along the bounce's own line (mutation.cpp's traceRay),
+// held chains left the capped means of seeds 11-14 3.1%, 2.5% and 3.1% low and the test failed.
+//
+// Where that shortfall lies: the bootstrap's candidates, splatted as an image of their own
+// (visitCandidateSplats: BDPT, with manifold next-event estimation in place of the strategies it
+// covers; 2^20 candidates of another seed, in 16 groups), estimate the chains' image without any
+// of their mutations. Measured: the chains put the light where that image does, band by band
+// (above the water -1.0%, -1.1%, -0.9% +- 2.7%; through it -0.5%, +0.2%, +0.7% +- 1.7-2.6%),
+// and that image lies as far below the reference as the chains: 1.2-1.3% above the water, 1.5-1.7%
+// through it (+- 0.3-0.7%). So what is left lies between that estimator, which the chains share
+// only through Z, and the reference. Our BDPT agrees with Tungsten's wherever both converge: on
+// this scene above the water (the ceiling within 0.2%; the back wall within 0.04%, where the
+// reference lies 4.0% above both), and with the light 200 times wider under it too (4 Tungsten
+// renders of 512 spp at 128x128 against 10 of ours of 40 s: -0.04%, +0.03%, +0.11% +- 0.2% in rows
+// 48-128). Manifold next-event estimation agrees with BDPT where BDPT converges
+// (manifold_next_event_test.cpp, within 0.6%). The reference's photon mapping is then the likely
+// remainder; its bias is not uniform (the back wall's 4%).
+//
+// So the test also holds the candidates' image to the reference as it holds mlt's, band by band
+// (a 3% loss in manifold next-event estimation's values fails it), and the chains to that image
+// within 4.4 standard errors from the spread of the 16 chain groups' images (4 a render) and of
+// the candidates' 16. The chains' bands are noisy (1.7-2.7% standard errors): that comparison
+// catches only gross misplacement. Acceptance of manifold perturbations doubled moved the blue
+// through the water by -3.1% +- 2.5% and passed it; the channel means above caught it (blue
+// 3.6% under the reference).
 TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   Image ref;
   std::string error;
@@ -267,23 +334,27 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   constexpr int kRenders = 4;
   Image average(ref.width, ref.height);
   double zRelative[kRenders] = {0, 0, 0, 0};
+  std::vector<Image> mltGroups;
+  const std::string path = kShared + "/scenes/water-caustic/scene.xml";
+  RenderSettings water;
+  water.algorithm = Algorithm::MLT;
+  water.shadingNormals = ShadingNormals::Lax;
+  water.maxDepth = kReferenceMaxDepth;
+  water.width = ref.width;
+  water.height = ref.height;
   for (int k = 0; k < kRenders; ++k) {
-    RenderSettings s;
-    s.algorithm = Algorithm::MLT;
-    s.shadingNormals = ShadingNormals::Lax;
-    s.maxDepth = kReferenceMaxDepth;
-    s.width = ref.width;
-    s.height = ref.height;
+    RenderSettings s = water;
     s.mutationsPerPixel = 375;
     s.numChains = 256;  // a chain held long at one path holds a 256th of the image, not a 64th
     s.bootstrapSamples = 1 << 18;
     s.seed = 11 + uint64_t(k);
-    auto scene = loadScene(kShared + "/scenes/water-caustic/scene.xml", s);
+    auto scene = loadScene(path, s);
     const LocalRenderResult r = renderLocally(RenderJob(scene, s, "water-caustic"));
     ASSERT_EQ(r.image.rgb.size(), ref.rgb.size());
     EXPECT_EQ(r.rejected.total(), 0);
     for (size_t i = 0; i < ref.rgb.size(); ++i) average.rgb[i] += r.image.rgb[i] / kRenders;
     zRelative[k] = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+    mltGroups.insert(mltGroups.end(), r.groupImages.begin(), r.groupImages.end());
   }
   ErrorMetrics m;
   ASSERT_TRUE(compareImages(average, ref, &m, &error)) << error;
@@ -310,6 +381,40 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
         << "channel " << ch << ", unclipped";
     EXPECT_NEAR(m.mean[ch] / m.referenceMean[ch], 1.0 - kReferenceBias, 0.02)
         << "channel " << ch << ", capped";
+  }
+
+  // Where the chains put the light, against the candidates' own image (2^20 of them, another
+  // seed): above the water, and what is seen through it (its surface from below and the floor
+  // under it), over the same pixels. And that image against the reference.
+  auto scene = loadScene(path, water);
+  const std::vector<Image> candidates = candidateImages(
+      RenderJob(scene, water, "water-caustic"), *scene, kReferenceMaxDepth, 99, 1 << 20, 16);
+  std::vector<char> below(ref.rgb.size() / 3);
+  for (size_t p = 0; p < below.size(); ++p)
+    below[p] = ref.rgb[3 * p] < cap && ref.rgb[3 * p + 1] < cap && ref.rgb[3 * p + 2] < cap;
+  ASSERT_EQ(mltGroups.size(), size_t(kRenders) * 4);
+  constexpr double kZ = 4.4;  // standard errors
+  const struct {
+    const char* name;
+    int y0, y1;
+  } bands[] = {{"above the water", 0, 64}, {"through the water", 64, 256}};
+  for (const auto& band : bands) {
+    const BandMeans chains = bandMeans(mltGroups, below, band.y0, band.y1);
+    const BandMeans own = bandMeans(candidates, below, band.y0, band.y1);
+    const BandMeans reference = bandMeans({ref}, below, band.y0, band.y1);
+    for (int ch = 0; ch < 3; ++ch) {
+      const double se = std::hypot(chains.stdError[ch], own.stdError[ch]);
+      const double ownRatio = own.mean[ch] / reference.mean[ch];
+      std::printf(
+          "  %s, channel %d: chains / candidates %+.2f%% +- %.2f%%, candidates / reference "
+          "%+.2f%% +- %.2f%%\n",
+          band.name, ch, 100 * (chains.mean[ch] / own.mean[ch] - 1), 100 * se / own.mean[ch],
+          100 * (ownRatio - 1), 100 * own.stdError[ch] / reference.mean[ch]);
+      EXPECT_NEAR(chains.mean[ch], own.mean[ch], kZ * se) << band.name << ", channel " << ch;
+      EXPECT_LT(se, 0.04 * own.mean[ch]) << band.name << ", channel " << ch << ": too noisy";
+      EXPECT_NEAR(ownRatio, 1.0 - kReferenceBias, 0.02) << band.name << ", channel " << ch;
+      EXPECT_LT(own.stdError[ch], 0.01 * own.mean[ch]) << band.name << ", channel " << ch;
+    }
   }
 }
 
