@@ -342,6 +342,7 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   water.maxDepth = kReferenceMaxDepth;
   water.width = ref.width;
   water.height = ref.height;
+  water.errorGroups = 4;  // the group images whose spread gives the chains' standard errors
   for (int k = 0; k < kRenders; ++k) {
     RenderSettings s = water;
     s.mutationsPerPixel = 375;
