@@ -360,25 +360,22 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   ErrorMetrics m;
   ASSERT_TRUE(compareImages(average, ref, &m, &error)) << error;
   const double cap = meanCap(ref);
-  double masked[3] = {0, 0, 0}, maskedRef[3] = {0, 0, 0};
-  for (size_t i = 0; i + 2 < ref.rgb.size(); i += 3) {
-    if (!(ref.rgb[i] < cap && ref.rgb[i + 1] < cap && ref.rgb[i + 2] < cap)) continue;
-    for (int ch = 0; ch < 3; ++ch) {
-      masked[ch] += average.rgb[i + size_t(ch)];
-      maskedRef[ch] += ref.rgb[i + size_t(ch)];
-    }
-  }
+  std::vector<char> below(ref.rgb.size() / 3);  // the pixels below the cap in every channel
+  for (size_t p = 0; p < below.size(); ++p)
+    below[p] = ref.rgb[3 * p] < cap && ref.rgb[3 * p + 1] < cap && ref.rgb[3 * p + 2] < cap;
+  const BandMeans masked = bandMeans({average}, below, 0, ref.height);
+  const BandMeans maskedRef = bandMeans({ref}, below, 0, ref.height);
   std::printf(
       "water caustic mlt, depth %d: over pixels below the cap %+.2f%% %+.2f%% %+.2f%% against "
       "the reference; capped means %+.2f%% %+.2f%% %+.2f%%; Z's relative standard errors %.2f%% "
       "%.2f%% %.2f%% %.2f%%\n",
-      kReferenceMaxDepth, 100 * (masked[0] / maskedRef[0] - 1),
-      100 * (masked[1] / maskedRef[1] - 1), 100 * (masked[2] / maskedRef[2] - 1),
-      100 * (m.mean[0] / m.referenceMean[0] - 1), 100 * (m.mean[1] / m.referenceMean[1] - 1),
-      100 * (m.mean[2] / m.referenceMean[2] - 1), 100 * zRelative[0], 100 * zRelative[1],
-      100 * zRelative[2], 100 * zRelative[3]);
+      kReferenceMaxDepth, 100 * (masked.mean[0] / maskedRef.mean[0] - 1),
+      100 * (masked.mean[1] / maskedRef.mean[1] - 1),
+      100 * (masked.mean[2] / maskedRef.mean[2] - 1), 100 * (m.mean[0] / m.referenceMean[0] - 1),
+      100 * (m.mean[1] / m.referenceMean[1] - 1), 100 * (m.mean[2] / m.referenceMean[2] - 1),
+      100 * zRelative[0], 100 * zRelative[1], 100 * zRelative[2], 100 * zRelative[3]);
   for (int ch = 0; ch < 3; ++ch) {
-    EXPECT_NEAR(masked[ch] / maskedRef[ch], 1.0 - kReferenceBias, 0.02)
+    EXPECT_NEAR(masked.mean[ch] / maskedRef.mean[ch], 1.0 - kReferenceBias, 0.02)
         << "channel " << ch << ", unclipped";
     EXPECT_NEAR(m.mean[ch] / m.referenceMean[ch], 1.0 - kReferenceBias, 0.02)
         << "channel " << ch << ", capped";
@@ -390,9 +387,6 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   auto scene = loadScene(path, water);
   const std::vector<Image> candidates = candidateImages(
       RenderJob(scene, water, "water-caustic"), *scene, kReferenceMaxDepth, 99, 1 << 20, 16);
-  std::vector<char> below(ref.rgb.size() / 3);
-  for (size_t p = 0; p < below.size(); ++p)
-    below[p] = ref.rgb[3 * p] < cap && ref.rgb[3 * p + 1] < cap && ref.rgb[3 * p + 2] < cap;
   ASSERT_EQ(mltGroups.size(), size_t(kRenders) * 4);
   constexpr double kZ = 4.4;  // standard errors
   const struct {
