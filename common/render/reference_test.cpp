@@ -387,7 +387,7 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
   auto scene = loadScene(path, water);
   const std::vector<Image> candidates = candidateImages(
       RenderJob(scene, water, "water-caustic"), *scene, kReferenceMaxDepth, 99, 1 << 20, 16);
-  ASSERT_EQ(mltGroups.size(), size_t(kRenders) * 4);
+  ASSERT_EQ(mltGroups.size(), size_t(kRenders) * size_t(water.errorGroups));
   constexpr double kZ = 4.4;  // standard errors
   const struct {
     const char* name;
