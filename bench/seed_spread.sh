@@ -10,12 +10,13 @@
 #          ../shared/references/veach-bidir-256.exr 10 bdpt,mmlt "$(seq -s ' ' 1 20)"
 # ALGORITHMS: comma-separated; SEEDS: space-separated; FLAGS go to every render (--width and
 # --height default to 256). The algorithms alternate seed by seed, so that a drift in the
-# machine's speed touches all alike. OUT (default out/seed-spread) keeps each run's log and the
-# table (table.md). Run it alone: timings beside a build are noise. About SECONDS + 1 a run.
+# machine's speed touches all alike. OUT (default out/seed-spread) keeps each run's log, image
+# and report (its relative MSE is report.json's) and the table (table.md). Run it alone:
+# timings beside a build are noise. About SECONDS + 1 a run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 5 ]; then
-  sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,/^[^#]/{/^#/s/^# \{0,1\}//p}' "$0"  # the comment above
   exit 2
 fi
 scene=$1 reference=$2 seconds=$3 algorithms=$4 seeds=$5
@@ -30,14 +31,14 @@ results="$out/results.txt"
 : > "$results"
 for seed in $seeds; do
   for algo in "${algos[@]}"; do
-    log="$out/$algo-$seed.log"
+    run="$out/$algo-$seed"
     if build/bin/farm render "$scene" --algorithm "$algo" --time "$seconds" --seed "$seed" \
-      --reference "$reference" -o "$out/$algo-$seed.exr" "${flags[@]}" > "$log" 2>&1; then
-      # The summary's line "error vs REF: rmse R, relMSE E (...)".
-      relmse=$(sed -n 's/.*error vs .*relMSE \([0-9.e+-]*\).*/\1/p' "$log" | tail -n 1)
+      --reference "$reference" --report "$run" -o "$run.exr" "${flags[@]}" > "$run.log" 2>&1; then
+      relmse=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["relmse"])' \
+        "$run/report.json" 2> /dev/null || true)
       echo "$algo $seed ${relmse:-?}" | tee -a "$results"
     else
-      echo "$algo seed $seed failed: see $log"
+      echo "$algo seed $seed failed: see $run.log"
     fi
   done
 done
