@@ -125,8 +125,8 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "independent Markov chains (pssmlt, pssmlt-pt, mmlt, mlt), each seeded by the "
                    "bootstrap, or work units (pt, bdpt): more chains cover the image more evenly "
                    "where chains hardly leave the kind of path they start on; 0: the plan's, 64 "
-                   "or, for mlt where light arrives along specular-diffuse-specular paths, 1024 "
-                   "(`farm plan` says which)")
+                   "or, for the Markov chains where any light arrives along "
+                   "specular-diffuse-specular paths, 1024 (`farm plan` says which)")
       ->default_str("0");
   command
       ->add_option("--bootstrap-candidates", o->bootstrapCandidates,

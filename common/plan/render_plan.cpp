@@ -47,7 +47,7 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
   // veach-bidir (1% of camera rays and 0.7% of light rays meet its glass first): bdpt's
   // relative MSE went from 0.004 to 0.087 in one second at 29 s, and ended at 0.041 at 100 s,
   // pt's at 0.034; the Markov chains spread such paths: mmlt 0.0022, mlt 0.0065, pssmlt 0.015.
-  const bool someSds = s.hasSpecular() && s.smallLights && s.specularSeen > 0 && s.specularLit > 0;
+  const bool someSds = s.someSpecularDiffuseSpecular();
   // Otherwise a few candidates, the first being what renders without a pilot (a budget too
   // short for one) and unless the pilot finds another clearly better. Measured (README, "The
   // plan"): on scenes without specular surfaces pt, bdpt and pssmlt, pt first under large
@@ -136,13 +136,21 @@ void RenderPlan::choose(Algorithm chosen) {
   const bool mlt = algorithm == Algorithm::MLT;
   chains = 0;
   chainsReason.clear();
-  if (mlt && s.specularDiffuseSpecular()) {
+  if (isMarkovChain(algorithm) && s.someSpecularDiffuseSpecular()) {
     chains = requestedChains > 0 ? requestedChains : kSdsChains;
-    chainsReason = requestedChains > 0
-                       ? "requested; the plan's would be " + std::to_string(kSdsChains)
-                       : "specular-diffuse-specular light: a chain seldom leaves the caustic it "
-                         "starts on, so more and shorter chains spread what each finds (relative "
-                         "MSE on water-caustic at 30 s: 0.8 against 3.3 with 64)";
+    if (requestedChains > 0)
+      chainsReason = "requested; the plan's would be " + std::to_string(kSdsChains);
+    else if (s.specularDiffuseSpecular())
+      chainsReason =
+          "specular-diffuse-specular light: a chain seldom leaves the caustic it starts on, so "
+          "more and shorter chains spread what each finds (mlt's relative MSE on water-caustic "
+          "at 30 s: 0.8 against 3.3 with 64)";
+    else
+      chainsReason =
+          "some specular-diffuse-specular light: a chain that finds such a path holds it for "
+          "thousands of mutations, so more and shorter chains spread what each finds (mmlt's "
+          "relative MSE on veach-bidir at 30 s, seeds 1-4: at most 0.015 against up to 0.47 "
+          "with 64)";
   }
   const std::string noSpecular = "no specular surfaces";
   auto mutation = [&](const char* name, double weight, const char* reason) {

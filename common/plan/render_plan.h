@@ -50,7 +50,8 @@ struct RenderPlan {
   std::string why;          // why this algorithm, or this shortlist
   MutationMix mutationMix;  // mlt's, with the parts left out at zero weight
   // The chain count: requested (--chains, > 0), or the plan's where it departs from the
-  // default (kSdsChains for mlt under specular-diffuse-specular light), or 0: the default.
+  // default (kSdsChains for the Markov chains under any specular-diffuse-specular light), or 0:
+  // the default.
   int requestedChains = 0;
   int chains = 0;
   std::string chainsReason;
@@ -63,12 +64,15 @@ struct RenderPlan {
   std::vector<std::string> describe() const;
 };
 
-// Path-space MLT's chains where light arrives along specular-diffuse-specular paths, in place
-// of the default 64: such a chain seldom leaves the caustic it starts on, and a chain that
-// found a bright one keeps its share of the image there, so more and shorter chains spread
-// that share. Measured on water-caustic (lax normals, 30 s, seeds 1-3; relative MSE against
-// the reference): 7.4, 0.79, 1.6 with 64 chains; 0.89, 1.4, 0.87 with 256; 0.38, 0.70, 1.3
-// with 1024.
+// The Markov chains' count (pssmlt, pssmlt-pt, mmlt, mlt) where any light arrives along
+// specular-diffuse-specular paths (SceneAnalysis::someSpecularDiffuseSpecular), in place of
+// the default 64: such a chain seldom leaves the caustic it starts on, and a chain that found a
+// bright one keeps its share of the image there for thousands of mutations, so more and
+// shorter chains spread that share. Measured with mlt on water-caustic (lax normals, 30 s,
+// seeds 1-3; relative MSE against the reference): 7.4, 0.79, 1.6 with 64 chains; 0.89, 1.4,
+// 0.87 with 256; 0.38, 0.70, 1.3 with 1024. With mmlt on veach-bidir (30 s, seeds 1-4): 0.0053,
+// 0.47, 0.0060, 0.0055 with 64; 0.0052, 0.46, 0.0065, 0.012 with 256; 0.0052, 0.015, 0.0050,
+// 0.0050 with 1024 (README, "The plan").
 constexpr int kSdsChains = 1024;
 
 // The plan for rendering with `requested` (ignored when automatic: the analysis picks the

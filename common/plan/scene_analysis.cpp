@@ -98,6 +98,10 @@ bool SceneAnalysis::specularDiffuseSpecular() const {
   return hasSpecular() && smallLights && specularSeen >= 0.05 && specularLit >= 0.05;
 }
 
+bool SceneAnalysis::someSpecularDiffuseSpecular() const {
+  return hasSpecular() && smallLights && specularSeen > 0 && specularLit > 0;
+}
+
 // Whether a mesh's vertex normals part from its faces' normals anywhere (by more than about half
 // a degree): only then can the two normals disagree on a side. Many meshes carry vertex normals
 // that are their flat faces' (the Cornell box's OBJ walls).

@@ -69,6 +69,11 @@ struct SceneAnalysis {
   // sees diffuse surfaces through specular ones, and small lights light them through specular
   // ones (the water caustic). Only the manifold walks of path-space MLT find these.
   bool specularDiffuseSpecular() const;
+  // Some light, perhaps little, comes along such paths: the camera sees a specular surface and
+  // small lights light one, both at all (veach-bidir's glass egg under its lamp: 1% and 0.7%).
+  // pt and bdpt reach it only by hitting a light, in rare bright samples; a Markov chain that
+  // finds such a path holds it. Implied by specularDiffuseSpecular().
+  bool someSpecularDiffuseSpecular() const;
 };
 
 SceneAnalysis analyseScene(const Scene& scene);

@@ -67,17 +67,23 @@ TEST(PlanJob, AutoTakesTheOnlyCandidateWithoutAPilot) {
   EXPECT_EQ(settings.mutationMix, MutationMix());
 }
 
-// mlt under specular-diffuse-specular light gets the plan's chain count unless the settings
-// name one, and keeps its own with --no-plan; no other algorithm or scene is touched.
-TEST(PlanJob, MltUnderSpecularDiffuseSpecularLightTakesThePlansChains) {
+// The Markov chains under specular-diffuse-specular light, much (water-caustic) or little
+// (veach-bidir), get the plan's chain count unless the settings name one, and keep their own
+// with --no-plan; path tracing there, and every algorithm on scenes without such light, keeps
+// the default.
+TEST(PlanJob, MarkovChainsUnderSpecularDiffuseSpecularLightTakeThePlansChains) {
   std::shared_ptr<Scene> water = load(kShared + "/scenes/water-caustic/scene.xml", 32);
   RenderSettings settings;
   settings.algorithm = Algorithm::MLT;
   settings.width = settings.height = 32;
-  RenderSettings asked = settings, kept = settings, pssmlt = settings, cornell = settings;
+  RenderSettings asked = settings, kept = settings, pssmlt = settings, pt = settings,
+                 cornell = settings, mmlt = settings, bidirPt = settings, mis = settings,
+                 ajar = settings;
   asked.numChains = 256;
   kept.ignorePlan = true;
   pssmlt.algorithm = Algorithm::PSSMLT;
+  pt.algorithm = bidirPt.algorithm = Algorithm::PathTracing;
+  mmlt.algorithm = mis.algorithm = Algorithm::MMLT;
   const RenderPlan plan = planJob(water, &settings);
   EXPECT_EQ(settings.numChains, kSdsChains);
   EXPECT_EQ(plan.chains, kSdsChains);
@@ -92,10 +98,23 @@ TEST(PlanJob, MltUnderSpecularDiffuseSpecularLightTakesThePlansChains) {
   planJob(water, &kept);
   EXPECT_EQ(kept.numChains, kDefaultChains) << "--no-plan keeps the default";
   planJob(water, &pssmlt);
-  EXPECT_EQ(pssmlt.numChains, kDefaultChains);
+  EXPECT_EQ(pssmlt.numChains, kSdsChains);
+  planJob(water, &pt);
+  EXPECT_EQ(pt.numChains, kDefaultChains) << "work units, not chains";
+  std::shared_ptr<Scene> bidir = load(kShared + "/scenes/veach-bidir/scene.xml", 32);
+  const RenderPlan little = planJob(bidir, &mmlt);
+  EXPECT_EQ(mmlt.numChains, kSdsChains);
+  EXPECT_EQ(little.chainsReason.rfind("some specular-diffuse-specular light", 0), 0u)
+      << little.chainsReason;
+  planJob(bidir, &bidirPt);
+  EXPECT_EQ(bidirPt.numChains, kDefaultChains);
   const RenderPlan other = planJob(load(kShared + "/scenes/cornell-box/scene.xml", 32), &cornell);
   EXPECT_EQ(cornell.numChains, kDefaultChains);
   EXPECT_EQ(other.chains, 0);
+  planJob(load(kShared + "/scenes/veach-mis/scene.xml", 32), &mis);
+  EXPECT_EQ(mis.numChains, kDefaultChains) << "specular-free";
+  planJob(load(kShared + "/scenes/veach-ajar/scene.pbrt", 32), &ajar);
+  EXPECT_EQ(ajar.numChains, kDefaultChains) << "specular, but no such light";
   // And the job seeds that many chains.
   settings.mutationsPerPixel = 2;
   settings.bootstrapSamples = 1 << 12;
