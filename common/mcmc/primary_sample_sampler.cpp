@@ -21,7 +21,10 @@ float wrapUnit(float v) {
   return v < 1.0f ? v : 0.0f;  // floor can leave exactly 1 after rounding
 }
 
-constexpr uint32_t kStateMagic = 0x50535331;  // "PSS1"
+// "PSS2": each coordinate carries whether the current path reads it. A "PSS1" state (before
+// that) still resumes: the chain's rebuild of its current path marks what that path reads.
+constexpr uint32_t kStateMagic = 0x50535332;
+constexpr uint32_t kStateMagicWithoutReads = 0x50535331;
 
 }  // namespace
 
@@ -31,6 +34,7 @@ PrimarySampleSampler::PrimarySampleSampler(uint64_t seed, uint64_t stream,
 
 void PrimarySampleSampler::setSeed(const std::vector<float>& values) {
   x_.assign(values.size(), Coordinate());
+  currentReads_.clear();
   for (size_t i = 0; i < values.size(); ++i) {
     x_[i].value = wrapUnit(values[i]);
     x_[i].lastModified = 0;
@@ -44,50 +48,46 @@ void PrimarySampleSampler::startIteration() {
   ++iteration_;
   touched_.clear();
   largeStep_ = rng_.nextFloat() < largeStepProbability_;
-  backupLastLargeStep_ = lastLargeStep_;
-  if (largeStep_) lastLargeStep_ = iteration_;
   startPath();
 }
 
-void PrimarySampleSampler::ensureReady(size_t index) {
-  if (index >= x_.size()) {
-    // A coordinate no path has read yet: its value is simply a fresh uniform number.
-    size_t old = x_.size();
-    x_.resize(index + 1);
-    for (size_t i = old; i <= index; ++i) {
-      x_[i].value = rng_.nextFloat();
-      x_[i].lastModified = iteration_;
-      // Restoring after a rejection keeps the value (still a uniform number) and rewinds the
-      // time stamp with the iteration counter.
-      x_[i].backupValue = x_[i].value;
-      x_[i].backupModified = std::max<int64_t>(0, iteration_ - 1);
-      if (!frozen_) touched_.push_back(uint32_t(i));
-    }
-    return;
+void PrimarySampleSampler::grow(size_t index, int64_t lastModified) {
+  const size_t old = x_.size();
+  x_.resize(index + 1);
+  for (size_t i = old; i <= index; ++i) {
+    x_[i].value = rng_.nextFloat();
+    x_[i].lastModified = lastModified;
   }
+}
+
+void PrimarySampleSampler::ensureReady(size_t index) {
+  if (index >= x_.size()) grow(index, iteration_ - 1);
   Coordinate& c = x_[index];
-  if (c.lastModified == iteration_) return;
+  if (c.lastModified == iteration_) return;  // read already by this proposal
   c.backupValue = c.value;
   c.backupModified = c.lastModified;
   touched_.push_back(uint32_t(index));
-  if (c.lastModified < lastLargeStep_) {
-    // A large step since this coordinate was last read: the small steps before it do not matter.
+  // A coordinate the current path does not read is uniform under the target given the rest
+  // (I(u) does not depend on it), so it is redrawn from that, a Gibbs step that leaves the
+  // target invariant, before the symmetric move, which then leaves it uniform: it needs no
+  // history. Only the coordinates the current path reads take a small step.
+  if (largeStep_ || !c.readByCurrent) {
     c.value = rng_.nextFloat();
-    c.lastModified = lastLargeStep_;
-  }
-  int64_t smallSteps = iteration_ - c.lastModified;
-  if (smallSteps > 0) {
-    // n independent Gaussian steps add up to one of standard deviation sigma sqrt(n).
-    float sigma = kSmallStepSigma * std::sqrt(float(smallSteps));
-    c.value = wrapUnit(c.value + sigma * gaussian(rng_));
+  } else {
+    c.value = wrapUnit(c.value + kSmallStepSigma * gaussian(rng_));
   }
   c.lastModified = iteration_;
 }
 
 float PrimarySampleSampler::next(SampleStream stream) {
-  size_t index = size_t(streamIndex_[stream]++) * kStreamCount + size_t(stream);
+  const size_t index = size_t(streamIndex_[stream]++) * kStreamCount + size_t(stream);
   if (frozen_) {
-    if (index >= x_.size()) ensureReady(index);
+    // Rebuilding the current path: what it reads is what the current path reads.
+    if (index >= x_.size()) grow(index, iteration_);
+    if (!x_[index].readByCurrent) {
+      x_[index].readByCurrent = true;
+      currentReads_.push_back(uint32_t(index));
+    }
     return x_[index].value;
   }
   ensureReady(index);
@@ -95,6 +95,11 @@ float PrimarySampleSampler::next(SampleStream stream) {
 }
 
 void PrimarySampleSampler::accept() {
+  if (largeStep_) lastLargeStep_ = iteration_;
+  // The proposal's coordinates are the current path's now: each was touched once.
+  for (uint32_t i : currentReads_) x_[i].readByCurrent = false;
+  for (uint32_t i : touched_) x_[i].readByCurrent = true;
+  currentReads_.swap(touched_);
   touched_.clear();
 }
 
@@ -104,8 +109,6 @@ void PrimarySampleSampler::reject() {
     x_[i].lastModified = x_[i].backupModified;
   }
   touched_.clear();
-  lastLargeStep_ = backupLastLargeStep_;
-  // The chain did not move: coordinates no path read must not accrue this iteration's step.
   --iteration_;
 }
 
@@ -120,6 +123,7 @@ std::string PrimarySampleSampler::serialize() const {
   for (const Coordinate& c : x_) {
     appendBytes(s, c.value);
     appendBytes(s, c.lastModified);
+    appendBytes(s, uint8_t(c.readByCurrent));
   }
   return s;
 }
@@ -129,22 +133,32 @@ bool PrimarySampleSampler::deserialize(const std::string& bytes) {
   uint32_t magic;
   uint64_t state, inc, n;
   int64_t iteration, lastLarge;
-  if (!readBytes(bytes, at, &magic) || magic != kStateMagic) return false;
+  if (!readBytes(bytes, at, &magic)) return false;
+  if (magic != kStateMagic && magic != kStateMagicWithoutReads) return false;
+  const bool withReads = magic == kStateMagic;
   if (!readBytes(bytes, at, &state) || !readBytes(bytes, at, &inc) ||
       !readBytes(bytes, at, &iteration) || !readBytes(bytes, at, &lastLarge) ||
       !readBytes(bytes, at, &n)) {
     return false;
   }
-  if (n > (bytes.size() - at) / (sizeof(float) + sizeof(int64_t))) return false;
+  const size_t perCoordinate = sizeof(float) + sizeof(int64_t) + (withReads ? 1 : 0);
+  if (n > (bytes.size() - at) / perCoordinate) return false;
   std::vector<Coordinate> x(n);
-  for (Coordinate& c : x) {
+  std::vector<uint32_t> reads;
+  for (size_t i = 0; i < x.size(); ++i) {
+    Coordinate& c = x[i];
     if (!readBytes(bytes, at, &c.value) || !readBytes(bytes, at, &c.lastModified)) return false;
     if (!(c.value >= 0 && c.value < 1) || c.lastModified > iteration) return false;
+    uint8_t read = 0;
+    if (withReads && (!readBytes(bytes, at, &read) || read > 1)) return false;
+    c.readByCurrent = read != 0;
+    if (read) reads.push_back(uint32_t(i));
   }
   rng_.restore(state, inc);
   iteration_ = iteration;
   lastLargeStep_ = lastLarge;
   x_ = std::move(x);
+  currentReads_ = std::move(reads);
   touched_.clear();
   return true;
 }
