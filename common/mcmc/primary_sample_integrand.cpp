@@ -61,16 +61,15 @@ Vec2f primarySampleFilmPoint(const Camera& camera, Sampler& sampler) {
 }
 
 int chooseMultiplexedDepth(float u, int maxDepth, double* probability) {
-  if (maxDepth > 0) {
-    *probability = 1.0 / maxDepth;
-    return std::min(int(u * float(maxDepth)), maxDepth - 1) + 1;
-  }
-  // Geometric: P(depth = k) = (1 - q) q^(k - 1), by inversion; the cap is never reached in
-  // practice (q^4095 underflows) but keeps the depth finite.
+  // Geometric, truncated to 1..cap: P(depth = k) = (1 - q) q^(k - 1) / (1 - q^cap), by
+  // inversion. Unbounded, the cap is never reached in practice (q^4095 underflows) but keeps the
+  // depth finite.
   const double q = kMultiplexedDepthRatio;
-  int depth = 1 + int(std::floor(std::log1p(-double(u)) / std::log(q)));
-  depth = std::clamp(depth, 1, kUnboundedDepth);
-  *probability = (1 - q) * std::pow(q, depth - 1);
+  const int cap = maxDepth > 0 ? maxDepth : kUnboundedDepth;
+  const double mass = -std::expm1(double(cap) * std::log(q));  // 1 - q^cap
+  int depth = 1 + int(std::floor(std::log1p(-double(u) * mass) / std::log(q)));
+  depth = std::clamp(depth, 1, cap);
+  *probability = (1 - q) * std::pow(q, depth - 1) / mass;
   return depth;
 }
 

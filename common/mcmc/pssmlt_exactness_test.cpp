@@ -290,8 +290,8 @@ TEST(PssmltExactness, CornellBoxBlockSharesMultiplexed) {
 // A closed diffuse sphere of albedo rho that emits Le inside: a path of k edges carries
 // Le rho^(k-1) wherever the camera looks, so multiplexed MLT's chains must spend a share
 // rho^(k-1) / sum_j rho^(j-1) of their states at length k. Their final states are compared with
-// that by chi-square, for a bounded depth (uniform length choice) and an unbounded one
-// (geometric choice; lengths above 8 share one bin).
+// that by chi-square, for a bounded depth (the geometric length choice truncated) and an
+// unbounded one (lengths above 8 share one bin).
 void expectFurnaceDepths(int maxDepth) {
   const double rho = 0.6;
   Scene scene(whiteFurnace(float(rho), maxDepth, Spectrum(1.0f), 16));
