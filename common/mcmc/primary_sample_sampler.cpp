@@ -22,7 +22,8 @@ float wrapUnit(float v) {
 }
 
 // "PSS2": each coordinate carries whether the current path reads it. A "PSS1" state (before
-// that) still resumes: the chain's rebuild of its current path marks what that path reads.
+// that) still resumes: the chain's rebuild of its current path marks what that path reads, and
+// its last large step, which nothing needs now, is skipped.
 constexpr uint32_t kStateMagic = 0x50535332;
 constexpr uint32_t kStateMagicWithoutReads = 0x50535331;
 
@@ -40,7 +41,6 @@ void PrimarySampleSampler::setSeed(const std::vector<float>& values) {
     x_[i].lastModified = 0;
   }
   iteration_ = 0;
-  lastLargeStep_ = 0;
   touched_.clear();
 }
 
@@ -51,17 +51,17 @@ void PrimarySampleSampler::startIteration() {
   startPath();
 }
 
-void PrimarySampleSampler::grow(size_t index, int64_t lastModified) {
+void PrimarySampleSampler::grow(size_t index) {
   const size_t old = x_.size();
   x_.resize(index + 1);
   for (size_t i = old; i <= index; ++i) {
     x_[i].value = rng_.nextFloat();
-    x_[i].lastModified = lastModified;
+    x_[i].lastModified = iteration_ - 1;
   }
 }
 
 void PrimarySampleSampler::ensureReady(size_t index) {
-  if (index >= x_.size()) grow(index, iteration_ - 1);
+  if (index >= x_.size()) grow(index);
   Coordinate& c = x_[index];
   if (c.lastModified == iteration_) return;  // read already by this proposal
   c.backupValue = c.value;
@@ -83,7 +83,7 @@ float PrimarySampleSampler::next(SampleStream stream) {
   const size_t index = size_t(streamIndex_[stream]++) * kStreamCount + size_t(stream);
   if (frozen_) {
     // Rebuilding the current path: what it reads is what the current path reads.
-    if (index >= x_.size()) grow(index, iteration_);
+    if (index >= x_.size()) grow(index);
     if (!x_[index].readByCurrent) {
       x_[index].readByCurrent = true;
       currentReads_.push_back(uint32_t(index));
@@ -95,7 +95,6 @@ float PrimarySampleSampler::next(SampleStream stream) {
 }
 
 void PrimarySampleSampler::accept() {
-  if (largeStep_) lastLargeStep_ = iteration_;
   // The proposal's coordinates are the current path's now: each was touched once.
   for (uint32_t i : currentReads_) x_[i].readByCurrent = false;
   for (uint32_t i : touched_) x_[i].readByCurrent = true;
@@ -118,7 +117,6 @@ std::string PrimarySampleSampler::serialize() const {
   appendBytes(s, rng_.state());
   appendBytes(s, rng_.increment());
   appendBytes(s, iteration_);
-  appendBytes(s, lastLargeStep_);
   appendBytes(s, uint64_t(x_.size()));
   for (const Coordinate& c : x_) {
     appendBytes(s, c.value);
@@ -132,12 +130,12 @@ bool PrimarySampleSampler::deserialize(const std::string& bytes) {
   size_t at = 0;
   uint32_t magic;
   uint64_t state, inc, n;
-  int64_t iteration, lastLarge;
+  int64_t iteration, lastLarge;  // PSS1 only
   if (!readBytes(bytes, at, &magic)) return false;
   if (magic != kStateMagic && magic != kStateMagicWithoutReads) return false;
   const bool withReads = magic == kStateMagic;
   if (!readBytes(bytes, at, &state) || !readBytes(bytes, at, &inc) ||
-      !readBytes(bytes, at, &iteration) || !readBytes(bytes, at, &lastLarge) ||
+      !readBytes(bytes, at, &iteration) || (!withReads && !readBytes(bytes, at, &lastLarge)) ||
       !readBytes(bytes, at, &n)) {
     return false;
   }
@@ -156,7 +154,6 @@ bool PrimarySampleSampler::deserialize(const std::string& bytes) {
   }
   rng_.restore(state, inc);
   iteration_ = iteration;
-  lastLargeStep_ = lastLarge;
   x_ = std::move(x);
   currentReads_ = std::move(reads);
   touched_.clear();

@@ -56,8 +56,8 @@ class PrimarySampleSampler final : public Sampler {
   };
   // Moves coordinate `index` for this proposal (once per iteration), backing it up.
   void ensureReady(size_t index);
-  // Appends fresh uniform coordinates up to `index`, as last read at `lastModified`.
-  void grow(size_t index, int64_t lastModified);
+  // Appends fresh uniform coordinates up to `index`, as read before this iteration.
+  void grow(size_t index);
 
   Rng rng_;
   float largeStepProbability_;
@@ -65,7 +65,6 @@ class PrimarySampleSampler final : public Sampler {
   std::vector<uint32_t> touched_;       // coordinates the proposal read (and moved)
   std::vector<uint32_t> currentReads_;  // coordinates the current path reads
   int64_t iteration_ = 0;
-  int64_t lastLargeStep_ = 0;  // the last accepted large step (kept in the state, for its readers)
   bool largeStep_ = true;
   bool frozen_ = false;
   uint32_t streamIndex_[kStreamCount] = {0, 0};

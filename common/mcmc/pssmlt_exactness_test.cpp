@@ -197,6 +197,7 @@ TEST(PssmltExactness, StatisticSeesWrongTargets) {
 // --- The Cornell box against its converged reference ---------------------------------------
 
 constexpr int kFilm = 32, kBlocks = 4;  // 4 x 4 blocks of 8 x 8 pixels
+constexpr int kBins = kBlocks * kBlocks;
 
 // Per block, the reference's luminance over its total, then (from index kBlocks^2 on) each
 // channel of each block over the same total: a chain whose luminance lands in the right blocks
@@ -206,7 +207,6 @@ std::vector<double> referenceBlockShares() {
   std::string error;
   if (!readExr(kShared + "/references/cornell-box-256.exr", &ref, &error))
     throw std::runtime_error(error);
-  constexpr int kBins = kBlocks * kBlocks;
   std::vector<double> shares(4 * kBins, 0.0);
   double total = 0;
   for (int y = 0; y < ref.height; ++y) {
@@ -253,7 +253,6 @@ void expectBlockShares(Algorithm algorithm, int chains, int64_t mutations) {
   std::vector<ChainOutcome> outcomes = runChains(scene, *integrand, seeds, mutations, 0.3f);
   std::vector<std::vector<double>> shares;
   for (const ChainOutcome& o : outcomes) {
-    constexpr int kBins = kBlocks * kBlocks;
     std::vector<double> block(4 * kBins, 0.0);
     for (int y = 0; y < kFilm; ++y) {
       for (int x = 0; x < kFilm; ++x) {
