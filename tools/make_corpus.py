@@ -120,19 +120,12 @@ def lit_room(r, half, power):
     return walls + light + two_boxes(r), {"light_half_size": half, "radiance": radiance, **colours}
 
 
-def make_large_light(r, _dir):
-    body, p = lit_room(r, r.uniform(0.5, 0.9), r.uniform(6, 12))
-    return header(r.choice([8, 16, 65])) + body, p
-
-
-def make_small_light(r, _dir):
-    body, p = lit_room(r, r.uniform(0.08, 0.2), r.uniform(6, 12))
-    return header(r.choice([8, 16, 65])) + body, p
-
-
-def make_tiny_light(r, _dir):
-    body, p = lit_room(r, r.uniform(0.005, 0.02), r.uniform(6, 12))
-    return header(r.choice([8, 16, 65])) + body, p
+def make_room_light(smallest, largest):
+    """The three room families: a ceiling light of half-size in [smallest, largest]."""
+    def make(r, _dir):
+        body, p = lit_room(r, r.uniform(smallest, largest), r.uniform(6, 12))
+        return header(r.choice([8, 16, 65])) + body, p
+    return make
 
 
 def make_boxed_light(r, _dir):
@@ -234,11 +227,11 @@ def make_environment(r, directory):
         elevation = 90 - 180 * (j + 0.5) / h
         t = max(elevation, 0) / 90
         sky[j, :, :] = [0.3 + 0.3 * t, 0.45 + 0.35 * t, 0.8 + 0.2 * t] if elevation > 0 else [0.1, 0.1, 0.1]
+    se, sa = math.radians(sun_elevation), math.radians(sun_azimuth)
     for j in range(h):
+        elevation = math.radians(90 - 180 * (j + 0.5) / h)
         for i in range(w):
-            elevation = math.radians(90 - 180 * (j + 0.5) / h)
             azimuth = math.radians(360 * (i + 0.5) / w)
-            se, sa = math.radians(sun_elevation), math.radians(sun_azimuth)
             cos_angle = (math.sin(elevation) * math.sin(se) +
                          math.cos(elevation) * math.cos(se) * math.cos(azimuth - sa))
             if math.degrees(math.acos(max(-1.0, min(1.0, cos_angle)))) < sun_radius:
@@ -273,8 +266,8 @@ def make_textures(r, directory):
 
 
 MAKERS = {
-    "large-light": make_large_light, "small-light": make_small_light,
-    "tiny-light": make_tiny_light, "boxed-light": make_boxed_light,
+    "large-light": make_room_light(0.5, 0.9), "small-light": make_room_light(0.08, 0.2),
+    "tiny-light": make_room_light(0.005, 0.02), "boxed-light": make_boxed_light,
     "light-in-glass": make_light_in_glass, "specular-objects": make_specular_objects,
     "fog": make_fog, "environment": make_environment, "textures": make_textures,
 }
