@@ -45,18 +45,11 @@ for entry in "${scenes[@]}"; do
   done
 done
 python3 - "$out" "${times[@]}" <<'EOF'
-import csv, json, os, sys
+import json, os, sys
+sys.path.insert(0, "bench")
+from corpus_table import at, series  # relative MSE series and their value at a time
 out, times = sys.argv[1], [float(t) for t in sys.argv[2:]]
 algorithms = "pt,bdpt,pssmlt,pssmlt-pt,mmlt,mlt,erpt".split(",")
-
-def series(path):
-    with open(path) as f:
-        return [(float(r["elapsed_seconds"]), float(r["relmse"]))
-                for r in csv.DictReader(f) if r["relmse"] not in ("", "-1")]
-
-def at(points, t):
-    before = [e for s, e in points if s <= t * 1.02]
-    return before[-1] if before else None
 
 lines = ["| scene | seconds | " + " | ".join(algorithms) + " | best | auto (pick) | auto / best |",
          "|---|---|" + "---|" * (len(algorithms) + 3)]
