@@ -27,14 +27,16 @@ struct PlanPart {
   std::string reason;
 };
 
-// One candidate's pilot: its render seconds (after its bootstrap) and the relative MSE its
-// chain groups' spread estimated; score = relMSE x seconds, the error one second of it would
-// leave (relative MSE falls as 1 / time), lower is better.
+// One candidate's pilot: its render seconds (after its bootstrap), the relative MSE its chain
+// groups' spread estimated and, where three or more candidates rendered, the one their images'
+// differences estimate (common/film/cross_estimate.h); score = the larger relMSE x seconds, the
+// error one second of it would leave (relative MSE falls as 1 / time), lower is better.
 struct PilotFigure {
   Algorithm algorithm = Algorithm::PathTracing;
   double seconds = 0;
   double bootstrapSeconds = 0;
   double estimatedRelMse = -1;  // < 0: none (failure says why)
+  double crossRelMse = -1;      // < 0: fewer than three candidates rendered
   double score = -1;
   std::string failure;
 };

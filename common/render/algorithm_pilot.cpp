@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "common/film/batch_means.h"
+#include "common/film/cross_estimate.h"
 #include "common/render/render_job.h"
 #include "common/scene/scene.h"
 
@@ -28,8 +29,9 @@ double since(Clock::time_point t) {
 constexpr int kPilotGroups = 4;
 constexpr int kPilotMaxChains = 64;
 
+// *image: the candidate's image, for the cross estimate (runPilot).
 PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings, double seconds,
-                     const std::function<bool()>& keepGoing) {
+                     const std::function<bool()>& keepGoing, Image* image) {
   PilotFigure figure;
   figure.algorithm = settings.algorithm;
   settings.autoAlgorithm = false;
@@ -92,11 +94,11 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
       images.push_back(job.resolve(sums[g], job.imageScale(bootstrap, work[g])));
       groupWork.push_back(double(work[g]));
     }
-    const Image image = job.resolve(total, job.imageScale(bootstrap, totalWork));
+    *image = job.resolve(total, job.imageScale(bootstrap, totalWork));
     const double zRel = bootstrap.normalizationRelativeVariance();
     ErrorEstimate estimate;
     std::string error;
-    if (!estimateError(images, groupWork, image, zRel, &estimate, &error))
+    if (!estimateError(images, groupWork, *image, zRel, &estimate, &error))
       throw std::runtime_error(error);
     figure.estimatedRelMse = estimate.relMse;
     figure.score = estimate.relMse * figure.seconds;
@@ -123,11 +125,29 @@ std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
                                   const std::vector<Algorithm>& candidates, double seconds,
                                   const std::function<bool()>& keepGoing) {
   std::vector<PilotFigure> figures;
+  std::vector<Image> images;
   for (Algorithm a : candidates) {
     if (keepGoing && !keepGoing()) break;
     RenderSettings s = settings;
     s.algorithm = a;
-    figures.push_back(pilotOne(scene, s, seconds, keepGoing));
+    images.emplace_back();
+    figures.push_back(pilotOne(scene, s, seconds, keepGoing, &images.back()));
+  }
+  // Where three or more rendered, each is also judged by how far its image is from the others'
+  // (common/film/cross_estimate.h): its own groups agree on light they have all missed, the
+  // others' images do not. The score takes the larger of the two estimates.
+  std::vector<const Image*> rendered;
+  std::vector<PilotFigure*> renderedFigures;
+  for (size_t i = 0; i < figures.size(); ++i) {
+    if (figures[i].score < 0) continue;
+    rendered.push_back(&images[i]);
+    renderedFigures.push_back(&figures[i]);
+  }
+  const std::vector<double> cross = crossEstimates(rendered);
+  for (size_t i = 0; i < cross.size(); ++i) {
+    PilotFigure& f = *renderedFigures[i];
+    f.crossRelMse = cross[i];
+    f.score = std::max(f.estimatedRelMse, f.crossRelMse) * f.seconds;
   }
   std::stable_sort(figures.begin(), figures.end(), [](const PilotFigure& a, const PilotFigure& b) {
     const bool aOk = a.score >= 0, bOk = b.score >= 0;

@@ -2,12 +2,14 @@
 // Planning a job (common/plan/render_plan.h) and, for --algorithm auto, the pilot that ranks
 // the plan's candidates: each renders for a few seconds in this process, its chains in
 // independent groups whose spread estimates its relative MSE without a reference
-// (common/film/batch_means.h), and the candidate whose estimate times its render time is least
-// renders the job. Relative MSE falls as 1 / time for every algorithm here, so that product is
-// what one second of the candidate would leave: a pilot of equal seconds each ranks them as
-// the job would, up to the pilot's noise. The bootstrap's own time is left out of the product:
-// in the job it is a few percent (common/mcmc/bootstrap_size.h), in a pilot of a second it can
-// be most of it.
+// (common/film/batch_means.h); with three or more candidates each one's error is also
+// estimated from how its image differs from the others' (common/film/cross_estimate.h), which
+// sees light it has not found and they have, and the larger estimate counts. The candidate
+// whose estimate times its render time is least renders the job. Relative MSE falls as 1 / time for
+// every algorithm here, so that product is what one second of the candidate would leave: a pilot of
+// equal seconds each ranks them as the job would, up to the pilot's noise. The bootstrap's own time
+// is left out of the product: in the job it is a few percent (common/mcmc/bootstrap_size.h), in a
+// pilot of a second it can be most of it.
 #include <atomic>
 #include <functional>
 #include <memory>
