@@ -76,6 +76,56 @@ double probeLights(const Scene& scene) {
   return hits > 0 ? double(specular) / hits : 0;
 }
 
+// The share of camera rays whose first hit, a non-specular surface, sees a point sampled on a
+// light (picked by power) that faces it: where it is small, next-event estimation from the
+// camera's paths mostly finds its lights blocked and light arrives after bounces that must
+// find the light by chance (a light boxed in above a plate), which bdpt's light subpaths
+// carry. Environment lights are not sampled here (open scenes see their sky); with no other
+// light it is 1.
+double probeDirectLight(const Scene& scene) {
+  const Camera& camera = scene.camera();
+  const int side = int(std::sqrt(double(kProbeRays)));
+  Rng rng(2, 0x9e3779b97f4a7c15ull);
+  int seen = 0, lit = 0;
+  for (int j = 0; j < side; ++j) {
+    for (int i = 0; i < side; ++i) {
+      const Vec2f film((float(i) + 0.5f) / float(side) * float(camera.width()),
+                       (float(j) + 0.5f) / float(side) * float(camera.height()));
+      // Through the boundaries that only hold media (the probes see geometry, not fog).
+      SurfaceHit hit;
+      Ray ray = camera.generateRay(film);
+      bool found = scene.intersect(ray, &hit);
+      for (int k = 0; found && scene.isNullBoundary(hit.shape) && k < 16; ++k) {
+        ray = scene.spawnRay(hit.p, hit.ng, ray.d);
+        found = scene.intersect(ray, &hit);
+      }
+      if (!found || scene.isNullBoundary(hit.shape) || scene.bsdfOf(hit.shape).isDelta()) continue;
+      float pdf = 0;
+      const int light = scene.pickLight(rng.nextFloat(), &pdf);
+      const AreaLight& l = scene.lights()[size_t(light)];
+      if (l.isEnvironment()) continue;
+      ++seen;
+      if (scene.lightOf(hit.shape) >= 0) {
+        ++lit;
+        continue;
+      }
+      Vec3f p, n(0.0f);
+      if (l.isPoint()) {
+        p = scene.pointLight(light).position();
+      } else {
+        const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+        scene.sampleLightPoint(light, u, &p, &n);
+        if (dot(n, hit.p - p) <= 0) continue;  // the light's back: it emits from one side
+      }
+      std::vector<MediumSegment> segments;
+      int arrival = -1;
+      lit += scene.hasMedia() ? scene.mediumSegments(hit.p, hit.ng, p, n, -1, &segments, &arrival)
+                              : scene.visible(hit.p, hit.ng, p, n);
+    }
+  }
+  return seen > 0 ? double(lit) / seen : 1.0;
+}
+
 }  // namespace
 
 const char* lightKindName(LightSummary::Kind k) {
@@ -186,6 +236,7 @@ SceneAnalysis analyseScene(const Scene& scene) {
     }
   }
   a.maxDepth = d.maxDepth;
+  if (!scene.lights().empty()) a.directlyLit = probeDirectLight(scene);
   if (a.hasSpecular()) {
     a.specularSeen = probeCamera(scene);
     a.specularLit = probeLights(scene);

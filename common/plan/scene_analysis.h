@@ -59,6 +59,9 @@ struct SceneAnalysis {
   // hit is a specular surface, and of rays leaving the lights (by power) whose first hit is.
   double specularSeen = 0, specularLit = 0;
   int probeRays = 0;
+  // The share of camera rays whose first (non-specular) hit sees a point sampled on a light
+  // (scene_analysis.cpp: probeDirectLight); 1 with no finite light.
+  double directlyLit = 1;
   // The algorithms that can render it, and for each of the others why not (algorithmRefusal).
   std::vector<Algorithm> usable;
   std::vector<std::pair<Algorithm, std::string>> refused;
