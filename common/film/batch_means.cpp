@@ -3,41 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/film/neighbour_mean.h"
+
 namespace farm {
 
 namespace {
 
-// The mean of `values` (3 channels a pixel, row-major) over each pixel's kNeighbourhood^2
-// window, clipped at the image's border, without the pixel itself; per channel, by summed-area
-// tables.
+// r^2 is averaged over each pixel's kNeighbourhood^2 window (neighbour_mean.h).
 constexpr int kNeighbourhood = 9;
-
-std::vector<double> neighbourMean(const std::vector<double>& values, int width, int height) {
-  const size_t W = size_t(width) + 1, H = size_t(height) + 1;
-  std::vector<double> sum(W * H * 3, 0.0);  // sum[(y, x, c)] over pixels above and left of it
-  for (size_t y = 1; y < H; ++y)
-    for (size_t x = 1; x < W; ++x)
-      for (size_t c = 0; c < 3; ++c)
-        sum[(y * W + x) * 3 + c] = values[((y - 1) * size_t(width) + x - 1) * 3 + c] +
-                                   sum[((y - 1) * W + x) * 3 + c] + sum[(y * W + x - 1) * 3 + c] -
-                                   sum[((y - 1) * W + x - 1) * 3 + c];
-  std::vector<double> out(values.size());
-  const int r = kNeighbourhood / 2;
-  for (int y = 0; y < height; ++y) {
-    const size_t y0 = size_t(std::max(0, y - r)), y1 = size_t(std::min(height, y + r + 1));
-    for (int x = 0; x < width; ++x) {
-      const size_t x0 = size_t(std::max(0, x - r)), x1 = size_t(std::min(width, x + r + 1));
-      const double n = double((y1 - y0) * (x1 - x0)) - 1;
-      for (size_t c = 0; c < 3; ++c) {
-        const size_t i = (size_t(y) * size_t(width) + size_t(x)) * 3 + c;
-        const double window = sum[(y1 * W + x1) * 3 + c] - sum[(y0 * W + x1) * 3 + c] -
-                              sum[(y1 * W + x0) * 3 + c] + sum[(y0 * W + x0) * 3 + c];
-        out[i] = n > 0 ? (window - values[i]) / n : values[i];
-      }
-    }
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -95,7 +68,8 @@ bool estimateError(const std::vector<Image>& groups, const std::vector<double>& 
   // denominator that should weigh it. The cost is where r^2 bends within the window: a
   // smooth image's dark troughs take their brighter neighbours' r^2 (-1.7% on the unit test's
   // image, batch_means_test.cpp).
-  const std::vector<double> neighbours = neighbourMean(square, image.width, image.height);
+  const std::vector<double> neighbours =
+      neighbourMean(square, image.width, image.height, kNeighbourhood);
   double sumRel = 0, sumSq = 0;
   for (size_t i = 0; i < count; ++i) {
     sumRel += variance[i] / (neighbours[i] + 1e-2);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "common/film/neighbour_mean.h"
+
 namespace farm {
 
 std::vector<double> crossEstimates(const std::vector<const Image*>& images) {
@@ -17,25 +19,10 @@ std::vector<double> crossEstimates(const std::vector<const Image*>& images) {
   // pixel with a tenfold outlier would count for little more than one with none).
   const int w = images[0]->width, h = images[0]->height;
   if (size_t(w) * size_t(h) * 3 != size) return {};
-  std::vector<double> mean(size, 0.0), r(size, 0.0);
+  std::vector<double> mean(size, 0.0);
   for (const Image* image : images)
     for (size_t k = 0; k < size; ++k) mean[k] += image->rgb[k] / double(n);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const size_t k = (size_t(y) * w + x) * 3;
-      for (int c = 0; c < 3; ++c) {
-        double sum = 0;
-        int count = 0;
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int xx = x + dx, yy = y + dy;
-            if ((dx == 0 && dy == 0) || xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
-            sum += mean[(size_t(yy) * w + xx) * 3 + c];
-            ++count;
-          }
-        r[k + c] = count > 0 ? sum / count : mean[k + c];
-      }
-    }
+  const std::vector<double> r = neighbourMean(mean, w, h, 3);
   std::vector<std::vector<double>> d(n, std::vector<double>(n, 0.0));
   for (size_t a = 0; a < n; ++a)
     for (size_t b = a + 1; b < n; ++b) {
