@@ -171,6 +171,8 @@ TEST(RenderPlan, VeachBidirHasALittleSpecularDiffuseSpecularLight) {
   EXPECT_GT(p.scene.specularSeen, 0);
   EXPECT_GT(p.scene.specularLit, 0);
   EXPECT_FALSE(p.scene.specularDiffuseSpecular());
+  // Its lamp is beside the egg, not in it: no light inside glass for bdpt to carry out.
+  EXPECT_LT(p.scene.specularLit, kLightsInGlass);
   ASSERT_FALSE(p.shortlist.empty());
   EXPECT_EQ(p.shortlist.front(), Algorithm::MMLT);
   EXPECT_TRUE(candidate(p, Algorithm::MLT));
