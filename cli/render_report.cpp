@@ -188,8 +188,9 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
     // reference, gives the measured share.
     out << "  Z = " << format("%.6g", p.normalization) << " +- "
         << format("%.3g", p.normalizationStdError) << " (standard error "
-        << format("%.3g", 100 * zError) << "%, from " << p.bootstrapCandidates
-        << " candidates; an average pixel's at one splat per unit of work: "
+        << format("%.3g", 100 * zError) << "%, from " << p.bootstrapCandidates << " candidates"
+        << (p.largeSteps > 0 ? " and " + std::to_string(p.largeSteps) + " large steps" : "")
+        << "; an average pixel's at one splat per unit of work: "
         << format("%.3g", 100 * pixelErrorModel(p)) << "%)\n";
   }
   out << "  " << workUnit(s) << ": " << p.workDone << " ("

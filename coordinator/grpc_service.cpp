@@ -105,6 +105,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   m->set_normalization_std_error(p.normalizationStdError);
   m->set_bootstrap_seconds(p.bootstrapSeconds);
   m->set_bootstrap_candidates(p.bootstrapCandidates);
+  m->set_large_steps(p.largeSteps);
   m->set_chains_total(p.chainsTotal);
   m->set_chains_finished(p.chainsFinished);
   m->set_chains_leased(p.chainsLeased);
@@ -666,6 +667,7 @@ class WorkerService final : public v1::WorkerApi::Service {
     flush.finished = header.finished();
     for (const v1::MutationTally& t : header.tallies())
       flush.tallies.push_back({t.name(), t.proposed(), t.accepted()});
+    flush.largeSteps = largeStepsFromProto(header.large_steps());
     EncodedSplats encoded;
     encoded.sparse = header.sparse();
     encoded.compressed = header.compressed();

@@ -652,7 +652,8 @@ void Job::recordErrorLocked(SteadyClock::time_point now, bool force) {
   ErrorSample sample;
   sample.elapsedSeconds = secondsSince(submitted_, now);
   sample.samples = work;
-  Image image = renderJob_->resolve(aggregator_->sums(), renderJob_->imageScale(bootstrap_, work));
+  Image image = renderJob_->resolve(
+      aggregator_->sums(), renderJob_->imageScale(bootstrap_, work, aggregator_->largeSteps()));
   if (reference_) {
     ErrorMetrics metrics;
     if (compareImages(image, *reference_, &metrics, nullptr)) {
@@ -667,11 +668,12 @@ void Job::recordErrorLocked(SteadyClock::time_point now, bool force) {
     const int64_t w = aggregator_->groupWork(g);
     if (w <= 0) break;
     images.push_back(
-        renderJob_->resolve(aggregator_->groupSums(g), renderJob_->imageScale(bootstrap_, w)));
+        renderJob_->resolve(aggregator_->groupSums(g),
+                            renderJob_->imageScale(bootstrap_, w, aggregator_->largeSteps())));
     groupWork.push_back(double(w));
   }
   if (images.size() == groups && groups >= 2) {
-    const double zRel = bootstrap_.normalizationRelativeVariance();
+    const double zRel = bootstrap_.normalizationRelativeVariance(aggregator_->largeSteps());
     ErrorEstimate estimate;
     if (estimateError(images, groupWork, image, zRel, &estimate, nullptr))
       sample.estimatedRelMse = estimate.relMse;
@@ -699,9 +701,10 @@ void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
     }
     recordErrorLocked(now, true);
     const double seconds = secondsSince(submitted_, now);
-    Image image =
-        renderJob_->resolve(aggregator_->sums(), renderJob_->imageScale(bootstrap_, work));
-    ImageMetadata metadata = renderJob_->metadata(bootstrap_, work, seconds);
+    Image image = renderJob_->resolve(
+        aggregator_->sums(), renderJob_->imageScale(bootstrap_, work, aggregator_->largeSteps()));
+    ImageMetadata metadata =
+        renderJob_->metadata(bootstrap_, work, seconds, aggregator_->largeSteps());
     metadata["farm:jobId"] = id_;
     std::error_code ec;
     fs::create_directories(outputDir_, ec);
@@ -755,9 +758,13 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   p.renderPlan = renderPlan_;
   for (const auto& [worker, why] : setAside_) p.setAside.push_back(why);
   p.bootstrapSeconds = bootstrap_.seconds;
-  p.normalization = bootstrap_.normalization;
-  p.normalizationStdError = bootstrap_.normalizationStdError;
+  // Z as the image is scaled by it: the bootstrap's, with the large steps accepted so far.
+  const Normalization z =
+      bootstrap_.normalizationWith(aggregator_ ? aggregator_->largeSteps() : LargeStepSums());
+  p.normalization = z.value;
+  p.normalizationStdError = z.stdError;
   p.bootstrapCandidates = bootstrap_.candidates;
+  p.largeSteps = aggregator_ ? aggregator_->largeSteps().count : 0;
   p.plannedWork = plannedWork_;
   p.width = width_;
   p.height = height_;
@@ -841,7 +848,8 @@ Status Job::currentImage(Image* image) const {
     return Status::failedPrecondition("job " + id_ + " has no image yet (" + jobPhaseName(phase_) +
                                       ", no work accepted)");
   }
-  *image = renderJob_->resolve(aggregator_->sums(), renderJob_->imageScale(bootstrap_, work));
+  *image = renderJob_->resolve(aggregator_->sums(),
+                               renderJob_->imageScale(bootstrap_, work, aggregator_->largeSteps()));
   return Status::ok();
 }
 

@@ -261,6 +261,7 @@ void encodeEntry(const ChainFlush& flush, store::v1::FlushRecord* r) {
   r->set_rays(flush.rays);
   r->set_state(flush.state);
   for (const MutationTally& t : flush.tallies) toRecord(t, r->add_tallies());
+  if (flush.largeSteps.count != 0) toProto(flush.largeSteps, r->mutable_large_steps());
   r->set_finished(flush.finished);
 }
 
@@ -275,6 +276,7 @@ ChainFlush decodeEntry(const store::v1::FlushRecord& r) {
   flush.rays = r.rays();
   flush.state = r.state();
   for (const v1::MutationTally& t : r.tallies()) flush.tallies.push_back(fromRecord(t));
+  flush.largeSteps = largeStepsFromProto(r.large_steps());
   flush.finished = r.finished();
   return flush;
 }
@@ -351,6 +353,7 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
   r.set_accepted_flushes(s.acceptedFlushes);
   for (int64_t w : s.groupWork) r.add_group_work(w);
   for (const MutationTally& t : s.tallies) toRecord(t, r.add_tallies());
+  if (s.largeSteps.count != 0) toProto(s.largeSteps, r.mutable_large_steps());
   for (size_t i = 0; i < chains.size(); ++i) {
     store::v1::ChainRecord* c = r.add_chains();
     c->set_resume_state(chains[i].resumeState);
@@ -404,6 +407,7 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string
   s->acceptedFlushes = r.accepted_flushes();
   s->groupWork.assign(r.group_work().begin(), r.group_work().end());
   for (const v1::MutationTally& t : r.tallies()) s->tallies.push_back(fromRecord(t));
+  s->largeSteps = largeStepsFromProto(r.large_steps());
   for (const store::v1::ChainRecord& c : r.chains()) {
     chains->push_back({c.resume_state(), c.mutations_done(), c.next_flush_index(), c.finished()});
     s->nextFlush.push_back(c.next_flush_index());

@@ -39,6 +39,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["load_seconds"] = p.loadSeconds;
   j["bootstrap_seconds"] = p.bootstrapSeconds;
   j["bootstrap_candidates"] = p.bootstrapCandidates;
+  j["large_steps"] = p.largeSteps;  // pooled into normalization with the candidates
   j["render_seconds"] = p.renderSeconds;
   j["chains_total"] = p.chainsTotal;
   j["chains_finished"] = p.chainsFinished;

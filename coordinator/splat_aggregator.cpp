@@ -33,7 +33,8 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
       rejected_(snapshot.rejected),
       rays_(snapshot.rays),
       acceptedFlushes_(snapshot.acceptedFlushes),
-      tallies_(std::move(snapshot.tallies)) {
+      tallies_(std::move(snapshot.tallies)),
+      largeSteps_(snapshot.largeSteps) {
   const size_t groups = groupCount(chainGroup_), values = filmValues();
   if (snapshot.sums.size() != groups * values) {
     throw std::invalid_argument("the snapshot's film holds " +
@@ -81,6 +82,7 @@ SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
   s.rays = rays_;
   s.acceptedFlushes = acceptedFlushes_;
   s.tallies = tallies_;
+  s.largeSteps = largeSteps_;
   return s;
 }
 
@@ -142,6 +144,7 @@ void SplatAggregator::countFlush(const ChainFlush& flush) {
   groupWork_[chainGroup_[flush.chainIndex]] += flush.mutations;
   rejected_ += flush.rejected;
   rays_ += flush.rays;
+  largeSteps_ += flush.largeSteps;
   for (const MutationTally& t : flush.tallies) {
     auto it = std::find_if(tallies_.begin(), tallies_.end(),
                            [&](const MutationTally& sum) { return sum.name == t.name; });
@@ -187,6 +190,11 @@ FlushOutcome SplatAggregator::checkEntry(const ChainFlush& flush, std::string* p
   if (flush.mutations < 0 || flush.rejected.nan < 0 || flush.rejected.infinite < 0 ||
       flush.rejected.negative < 0 || flush.rays < 0) {
     why = name + " reports a negative count";
+    return FlushOutcome::kBadValues;
+  }
+  if (!flush.largeSteps.plausible() || flush.largeSteps.count > flush.mutations) {
+    why = name + " reports large steps that no chain makes (negative or non-finite sums, or " +
+          "more large steps than mutations)";
     return FlushOutcome::kBadValues;
   }
   if (flush.tallies.size() > kMaxTallyKinds) {

@@ -48,6 +48,7 @@ class SplatAggregator {
     int64_t rays = 0;
     uint64_t acceptedFlushes = 0;
     std::vector<MutationTally> tallies;
+    LargeStepSums largeSteps;
   };
 
   // chainGroups: each chain's error group (0 .. groups - 1).
@@ -88,6 +89,8 @@ class SplatAggregator {
   uint64_t acceptedFlushes() const { return acceptedFlushes_; }
   // Proposals and acceptances of the accepted flushes, by kind, in order of first appearance.
   const std::vector<MutationTally>& tallies() const { return tallies_; }
+  // The accepted flushes' large steps, which refine Z (RenderJob::imageScale).
+  const LargeStepSums& largeSteps() const { return largeSteps_; }
   // The flush index the chain's next accepted flush must carry.
   uint32_t nextFlushIndex(uint32_t chain) const { return nextFlush_.at(chain); }
   int width() const { return width_; }
@@ -108,6 +111,7 @@ class SplatAggregator {
   int64_t rays_ = 0;
   uint64_t acceptedFlushes_ = 0;
   std::vector<MutationTally> tallies_;
+  LargeStepSums largeSteps_;
 };
 
 }  // namespace farm

@@ -255,6 +255,21 @@ void toProto(const ChainFlush& f, uint64_t epoch, v1::BatchEntry* e) {
     tally->set_proposed(t.proposed);
     tally->set_accepted(t.accepted);
   }
+  if (f.largeSteps.count != 0) toProto(f.largeSteps, e->mutable_large_steps());
+}
+
+void toProto(const LargeStepSums& sums, v1::LargeStepSums* out) {
+  out->set_count(sums.count);
+  out->set_sum(sums.sum);
+  out->set_sum_squares(sums.sumSquares);
+}
+
+LargeStepSums largeStepsFromProto(const v1::LargeStepSums& sums) {
+  LargeStepSums s;
+  s.count = sums.count();
+  s.sum = sums.sum();
+  s.sumSquares = sums.sum_squares();
+  return s;
 }
 
 ChainFlush fromProto(const v1::BatchEntry& e) {
@@ -271,6 +286,7 @@ ChainFlush fromProto(const v1::BatchEntry& e) {
   for (const v1::MutationTally& t : e.tallies()) {
     f.tallies.push_back({t.name(), t.proposed(), t.accepted()});
   }
+  f.largeSteps = largeStepsFromProto(e.large_steps());
   return f;
 }
 

@@ -21,6 +21,8 @@ v1::ChainSpec toProto(const ChainSpec& spec);
 bool fromProto(const v1::ChainSpec& message, ChainSpec* out, std::string* error);
 // A flush as an entry of a batch (everything but its film) and back.
 void toProto(const ChainFlush& flush, uint64_t epoch, v1::BatchEntry* entry);
+void toProto(const LargeStepSums& sums, v1::LargeStepSums* out);
+LargeStepSums largeStepsFromProto(const v1::LargeStepSums& sums);
 ChainFlush fromProto(const v1::BatchEntry& entry);
 
 // Lowercase names of job phases, as `farm status` and `farm list` print them.

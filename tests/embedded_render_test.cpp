@@ -9,6 +9,8 @@
 #include <fstream>
 
 #include "cli/render_report.h"
+#include "common/render/local_render.h"
+#include "common/render/render_job.h"
 #include "common/scene/stiff_scenes.h"
 
 namespace farm {
@@ -45,6 +47,39 @@ TEST(EmbeddedRender, WorkerCountDoesNotChangeTheImage) {
     }
     EXPECT_EQ(one.progress.workDone, one.progress.plannedWork);
     EXPECT_EQ(one.metadata.count("farm:algorithm"), 1u);
+  }
+}
+
+// The farm scales the image by Z pooled from the bootstrap and the large steps its flushes
+// carried (common/mcmc/normalization.h), as renderLocally does: the same job and seed give the
+// same image both ways, and a coordinator that left the large steps out (the bootstrap's Z
+// alone, about 0.5% off here) would not.
+TEST(EmbeddedRender, ZPoolsTheLargeStepsAsARenderHereDoes) {
+  for (Algorithm a : {Algorithm::PSSMLT, Algorithm::MMLT}) {
+    EmbeddedRenderOptions o = options(a, 2, 1);
+    o.settings.bootstrapSamples = 4096;  // a rough Z, for the large steps to refine
+    EmbeddedRenderResult farm;
+    Status s = renderEmbedded(o, &farm);
+    ASSERT_TRUE(s.isOk()) << s.message();
+    RenderSettings settings = o.settings;
+    const LocalRenderResult here =
+        renderLocally(RenderJob(loadScene(kScene, settings), settings, "here"));
+    ASSERT_GT(here.largeSteps.count, 0);
+    EXPECT_EQ(farm.progress.largeSteps, here.largeSteps.count) << algorithmName(a);
+    const Normalization z = here.bootstrap.normalizationWith(here.largeSteps);
+    EXPECT_NEAR(farm.progress.normalization, z.value, 1e-9 * z.value) << algorithmName(a);
+    EXPECT_LT(z.stdError, here.bootstrap.normalizationStdError) << algorithmName(a);
+    EXPECT_GT(std::abs(z.value / here.bootstrap.normalization - 1), 1e-6)
+        << "the large steps moved Z (else this test could not tell)";
+    ASSERT_EQ(farm.image.rgb.size(), here.image.rgb.size());
+    for (size_t i = 0; i < here.image.rgb.size(); ++i) {
+      ASSERT_NEAR(farm.image.rgb[i], here.image.rgb[i], 1e-5 * std::max(1.0f, here.image.rgb[i]))
+          << algorithmName(a) << " value " << i;
+    }
+    EXPECT_EQ(farm.metadata.at("farm:normalizationLargeSteps"),
+              std::to_string(here.largeSteps.count));
+    EXPECT_NE(finalReport(farm.progress, "cornell-box", "").find(" large steps;"),
+              std::string::npos);
   }
 }
 

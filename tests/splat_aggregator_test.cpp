@@ -60,6 +60,37 @@ TEST(SplatAggregator, RejectsWhatDoesNotFitWithoutChangingTheSums) {
   EXPECT_EQ(sum.add(makeFlush(0, 0, 1.0f)), FlushOutcome::kAccepted);
 }
 
+// The chains' large steps (which refine Z) count once per accepted flush, survive a snapshot,
+// and a flush whose sums no chain could make is refused whole.
+TEST(SplatAggregator, LargeStepsCountOncePerAcceptedFlushAndSurviveASnapshot) {
+  SplatAggregator sum(2, 2, 2);
+  ChainFlush f = makeFlush(0, 0, 1.0f);
+  f.largeSteps = {30, 6.0, 2.5};
+  EXPECT_EQ(sum.add(f), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.add(f), FlushOutcome::kDuplicate);
+  ChainFlush g = makeFlush(1, 0, 1.0f);
+  g.largeSteps = {20, 4.0, 1.5};
+  EXPECT_EQ(sum.add(g), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.largeSteps().count, 50);
+  EXPECT_EQ(sum.largeSteps().sum, 10.0);
+  EXPECT_EQ(sum.largeSteps().sumSquares, 4.0);
+  SplatAggregator restored(2, 2, {0, 0}, sum.snapshot());
+  EXPECT_EQ(restored.largeSteps().count, 50);
+  EXPECT_EQ(restored.largeSteps().sum, 10.0);
+
+  std::string why;
+  for (LargeStepSums bad :
+       {LargeStepSums{-1, 0, 0}, LargeStepSums{101, 1, 1}, LargeStepSums{5, -1, 1},
+        LargeStepSums{5, 1, -1}, LargeStepSums{5, std::numeric_limits<double>::infinity(), 1},
+        LargeStepSums{5, std::numeric_limits<double>::quiet_NaN(), 1}, LargeStepSums{0, 1, 1}}) {
+    ChainFlush h = makeFlush(0, 1, 1.0f);
+    h.largeSteps = bad;
+    EXPECT_EQ(sum.add(h, &why), FlushOutcome::kBadValues) << bad.count << " " << bad.sum;
+    EXPECT_NE(why.find("large steps"), std::string::npos) << why;
+  }
+  EXPECT_EQ(sum.largeSteps().count, 50) << "refused flushes count nothing";
+}
+
 // Acceptance tallies count once per accepted flush, like the splats; a malformed tally refuses
 // the whole flush.
 TEST(SplatAggregator, TalliesCountOncePerAcceptedFlush) {

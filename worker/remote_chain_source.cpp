@@ -227,6 +227,7 @@ struct RemoteChainSource::Impl {
       tally->set_proposed(t.proposed);
       tally->set_accepted(t.accepted);
     }
+    if (flush.largeSteps.count != 0) toProto(flush.largeSteps, header->mutable_large_steps());
     header->set_splat_bytes(splats.bytes.size());
     header->set_sparse(splats.sparse);
     header->set_compressed(splats.compressed);

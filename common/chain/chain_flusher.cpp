@@ -46,6 +46,8 @@ bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::s
   f.finished = finished;
   for (auto& [name, t] : tallies_) f.tallies.push_back(t);
   tallies_.clear();
+  f.largeSteps = largeSteps_;
+  largeSteps_ = LargeStepSums();
   raysAtFlush_ = raysTraced;
   film_.clear();
   sinceFlush_ = 0;

@@ -4,6 +4,7 @@
 // a ChainFlush with the count they cover and the chain's state, so that another worker can
 // resume exactly there.
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -37,6 +38,14 @@ class ChainFlusher {
   // Counts a proposal of the given kind (a string with static storage) and whether the chain
   // moved; reported with the next flush.
   void tally(const char* kind, bool accepted);
+  // Counts a large step whose proposal carried contribution I (accepted or not: its I is an
+  // independent sample of the integrand either way); reported with the next flush.
+  void largeStep(double I) {
+    if (!std::isfinite(I) || I < 0) return;  // an invalid path's I never reaches the chain
+    ++largeSteps_.count;
+    largeSteps_.sum += I;
+    largeSteps_.sumSquares += I * I;
+  }
   // Counts one mutation and flushes when one is due; raysTraced is the chain's running total
   // and state() the chain's resumable state. False when the receiver says stop.
   bool countMutation(uint64_t raysTraced, const std::function<std::string()>& state);
@@ -51,6 +60,7 @@ class ChainFlusher {
   uint32_t flushIndex_;
   uint64_t raysAtFlush_ = 0;
   std::vector<std::pair<const char*, MutationTally>> tallies_;
+  LargeStepSums largeSteps_;
 };
 
 }  // namespace farm

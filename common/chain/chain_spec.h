@@ -72,6 +72,28 @@ struct MutationTally {
   int64_t accepted = 0;
 };
 
+// Sums over a chain's large steps of the proposed path's scalar contribution I. A large step
+// draws every primary sample afresh, so its I is an independent sample of the integrand whose
+// mean is the normalization Z, as the bootstrap's candidates are (Kelemen et al. 2002 estimate
+// their b from the large steps alone): pooled with the candidates, Z's error keeps falling while
+// the chains run (common/mcmc/normalization.h). Zero for algorithms without large steps.
+struct LargeStepSums {
+  int64_t count = 0;
+  double sum = 0;         // of I
+  double sumSquares = 0;  // of I^2, for Z's standard error
+  LargeStepSums& operator+=(const LargeStepSums& o) {
+    count += o.count;
+    sum += o.sum;
+    sumSquares += o.sumSquares;
+    return *this;
+  }
+  // What a flush from an honest chain can hold: counts and sums non-negative and finite.
+  bool plausible() const {
+    return count >= 0 && sum >= 0 && sumSquares >= 0 && sum < 1e300 && sumSquares < 1e300 &&
+           (count > 0 || (sum == 0 && sumSquares == 0));
+  }
+};
+
 // The splats of one flush: the change to the film since the chain's previous flush.
 struct ChainFlush {
   uint32_t chainIndex = 0;
@@ -83,6 +105,7 @@ struct ChainFlush {
   int64_t rays = 0;                    // rays traced for this flush's work (for rays per second)
   std::string state;                   // chain state after this flush (resume with ChainSpec)
   std::vector<MutationTally> tallies;  // proposals and acceptances in this flush, by kind
+  LargeStepSums largeSteps;            // this flush's large steps (primary-sample chains)
   bool finished = false;               // the chain's budget is spent
 };
 

@@ -39,6 +39,8 @@ std::vector<ChainFlush> expectResumesExactly(const ChainSpec& spec, size_t from,
     EXPECT_EQ(rest[k].mutations, expected.mutations);
     EXPECT_EQ(rest[k].splats, expected.splats) << "flush " << expected.flushIndex;
     EXPECT_EQ(rest[k].state, expected.state) << "flush " << expected.flushIndex;
+    EXPECT_EQ(rest[k].largeSteps.count, expected.largeSteps.count);
+    EXPECT_EQ(rest[k].largeSteps.sum, expected.largeSteps.sum);
   }
   return whole;
 }

@@ -80,6 +80,8 @@ void runPssmltChain(const Scene& scene, const PrimarySampleIntegrand& integrand,
     InvalidSplats dropped;
     double proposedI = evaluateContribution(integrand, sampler, &proposed, &dropped);
     flusher.reject(dropped);
+    const bool largeStep = sampler.isLargeStep();
+    if (largeStep) flusher.largeStep(proposedI);
     const double a = metropolisAcceptance(proposedI, currentI);
     if (a > 0) {
       float w = float(a / proposedI);
@@ -89,7 +91,6 @@ void runPssmltChain(const Scene& scene, const PrimarySampleIntegrand& integrand,
       float w = float((1 - a) / currentI);
       for (const Splat& s : current) film.add(s.film, s.value, w);
     }
-    const bool largeStep = sampler.isLargeStep();
     if (a >= 1 || sampler.rng().nextDouble() < a) {
       std::swap(current, proposed);
       currentI = proposedI;

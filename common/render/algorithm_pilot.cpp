@@ -54,6 +54,7 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
     const int groups = kPilotGroups;  // planChains: min(errorGroups, chains) of them
     std::vector<std::vector<double>> sums(groups, std::vector<double>(size, 0.0));
     std::vector<int64_t> work(groups, 0);
+    LargeStepSums largeSteps;
     std::mutex mutex;
     std::atomic<bool> stop{false};
     std::string failure;
@@ -68,6 +69,7 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
               std::vector<double>& s = sums[spec.errorGroup % groups];
               for (size_t k = 0; k < size && k < f.splats.size(); ++k) s[k] += f.splats[k];
               work[spec.errorGroup % groups] += f.mutations;
+              largeSteps += f.largeSteps;
             }
             if (since(start) >= seconds || (keepGoing && !keepGoing())) stop = true;
             return !stop.load();
@@ -91,11 +93,11 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
       if (work[g] <= 0) throw std::runtime_error("a chain group did no work in the pilot");
       for (size_t k = 0; k < size; ++k) total[k] += sums[g][k];
       totalWork += work[g];
-      images.push_back(job.resolve(sums[g], job.imageScale(bootstrap, work[g])));
+      images.push_back(job.resolve(sums[g], job.imageScale(bootstrap, work[g], largeSteps)));
       groupWork.push_back(double(work[g]));
     }
-    *image = job.resolve(total, job.imageScale(bootstrap, totalWork));
-    const double zRel = bootstrap.normalizationRelativeVariance();
+    *image = job.resolve(total, job.imageScale(bootstrap, totalWork, largeSteps));
+    const double zRel = bootstrap.normalizationRelativeVariance(largeSteps);
     ErrorEstimate estimate;
     std::string error;
     if (!estimateError(images, groupWork, *image, zRel, &estimate, &error))

@@ -69,7 +69,7 @@ void expectUniformImage(Algorithm algorithm, const SceneDescription& desc, float
     const double expected = double(kSky[c]) * factor;
     double se = st.stdError[c];
     if (isMarkovChain(algorithm) && r.bootstrap.normalization > 0) {  // the image scales with Z
-      const double zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+      const double zRel = std::sqrt(r.bootstrap.normalizationRelativeVariance(r.largeSteps));
       se = std::hypot(se, expected * zRel);
     }
     EXPECT_NEAR(st.mean[c], expected, 4 * se + 1e-6 * expected)

@@ -55,6 +55,7 @@ LocalRenderResult renderLocally(const RenderJob& job) {
           sum.proposed += t.proposed;
           sum.accepted += t.accepted;
         }
+        result.largeSteps += f.largeSteps;
         result.work += f.mutations;
         result.chainWork[i] += f.mutations;
         result.rays += f.rays;
@@ -68,10 +69,13 @@ LocalRenderResult renderLocally(const RenderJob& job) {
       if (budget <= 0) finished[i] = 1;
     });
   }
-  result.image = job.resolve(sums, job.imageScale(result.bootstrap, result.work));
+  result.image =
+      job.resolve(sums, job.imageScale(result.bootstrap, result.work, result.largeSteps));
+  // Every group's image with the same Z, pooled from all the chains: Z's error scales every
+  // group alike (batch_means.h) and is counted once, not as spread between them.
   for (uint32_t g = 0; g < groups; ++g)
-    result.groupImages.push_back(
-        job.resolve(groupSums[g], job.imageScale(result.bootstrap, groupWork[g])));
+    result.groupImages.push_back(job.resolve(
+        groupSums[g], job.imageScale(result.bootstrap, groupWork[g], result.largeSteps)));
   result.seconds = elapsed();
   return result;
 }

@@ -31,6 +31,8 @@ struct LocalRenderResult {
   // image's sum over any region.
   std::vector<Image> groupImages;
   std::map<std::string, MutationTally> tallies;  // proposals and acceptances by kind
+  // The chains' large steps: the image is scaled by bootstrap.normalizationWith(largeSteps).
+  LargeStepSums largeSteps;
 };
 
 LocalRenderResult renderLocally(const RenderJob& job);

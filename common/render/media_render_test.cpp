@@ -53,7 +53,7 @@ Image renderSmokyBox(Algorithm algorithm, int64_t budget, uint64_t seed, double*
   RenderJob job(loadScene(file, s), s, "smoky-box");
   LocalRenderResult r = renderLocally(job);
   EXPECT_EQ(r.rejected.total(), 0);
-  if (zRel) *zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+  if (zRel) *zRel = std::sqrt(r.bootstrap.normalizationRelativeVariance(r.largeSteps));
   return r.image;
 }
 

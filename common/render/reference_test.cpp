@@ -97,10 +97,9 @@ void expectAgreement(const Case& c) {
   expectedRelMse /= double(n) * 3;
   double zRel = 0;
   if (isMarkovChain(c.algorithm)) {
-    double z = 0.5 * (r[0].bootstrap.normalization + r[1].bootstrap.normalization);
-    double se = 0.5 * std::hypot(r[0].bootstrap.normalizationStdError,
-                                 r[1].bootstrap.normalizationStdError);
-    zRel = se / z;
+    const Normalization z0 = r[0].bootstrap.normalizationWith(r[0].largeSteps);
+    const Normalization z1 = r[1].bootstrap.normalizationWith(r[1].largeSteps);
+    zRel = 0.5 * std::hypot(z0.stdError, z1.stdError) / (0.5 * (z0.value + z1.value));
   }
   // ERPT spreads each seed's energy over many pixels, so its pixels are not independent; its
   // tiles are: the variance of the image's sum comes from the two renders' tile totals.
@@ -354,7 +353,7 @@ TEST(Reference, WaterCausticPathSpaceMeetsTheReference) {
     ASSERT_EQ(r.image.rgb.size(), ref.rgb.size());
     EXPECT_EQ(r.rejected.total(), 0);
     for (size_t i = 0; i < ref.rgb.size(); ++i) average.rgb[i] += r.image.rgb[i] / kRenders;
-    zRelative[k] = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+    zRelative[k] = std::sqrt(r.bootstrap.normalizationRelativeVariance(r.largeSteps));
     mltGroups.insert(mltGroups.end(), r.groupImages.begin(), r.groupImages.end());
   }
   ErrorMetrics m;

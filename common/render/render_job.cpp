@@ -343,8 +343,14 @@ std::vector<ChainSpec> RenderJob::planTiles(const BootstrapResult& bootstrap) co
 }
 
 double RenderJob::imageScale(const BootstrapResult& bootstrap, int64_t workDone) const {
+  return imageScale(bootstrap, workDone, LargeStepSums());
+}
+
+double RenderJob::imageScale(const BootstrapResult& bootstrap, int64_t workDone,
+                             const LargeStepSums& largeSteps) const {
   if (workDone <= 0) return 0;
-  if (isMarkovChain(settings_.algorithm)) return bootstrap.normalization / double(workDone);
+  if (isMarkovChain(settings_.algorithm))
+    return bootstrap.normalizationWith(largeSteps).value / double(workDone);
   return 1.0 / double(workDone);
 }
 
@@ -382,7 +388,7 @@ Image RenderJob::resolve(const std::vector<double>& sums, double scale) const {
 }
 
 ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t workDone,
-                                  double seconds) const {
+                                  double seconds, const LargeStepSums& largeSteps) const {
   ImageMetadata m;
   m["farm:algorithm"] = algorithmName(settings_.algorithm);
   m["farm:scene"] = scene_->description().sourcePath;
@@ -394,9 +400,11 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
   if (isMarkovChain(settings_.algorithm)) {
     m["farm:mutations"] = std::to_string(workDone);
     m["farm:mutationsPerPixel"] = formatDouble(workDone / pixels);
-    m["farm:normalization"] = formatDouble(bootstrap.normalization);
-    m["farm:normalizationStdError"] = formatDouble(bootstrap.normalizationStdError);
+    const Normalization z = bootstrap.normalizationWith(largeSteps);
+    m["farm:normalization"] = formatDouble(z.value);
+    m["farm:normalizationStdError"] = formatDouble(z.stdError);
     m["farm:bootstrapCandidates"] = std::to_string(bootstrap.candidates);
+    if (largeSteps.count > 0) m["farm:normalizationLargeSteps"] = std::to_string(largeSteps.count);
     m["farm:bootstrapSeconds"] = formatDouble(bootstrap.seconds);
     if (settings_.algorithm == Algorithm::MLT) {
       m["farm:mutationMix"] = formatMutationMix(settings_.mutationMix);

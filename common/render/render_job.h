@@ -11,6 +11,7 @@
 
 #include "common/chain/chain_spec.h"
 #include "common/film/image.h"
+#include "common/mcmc/normalization.h"
 #include "common/render/render_settings.h"
 
 namespace farm {
@@ -40,6 +41,17 @@ struct BootstrapResult {
   double normalizationRelativeVariance() const {
     if (!(normalization > 0)) return 0;
     const double r = normalizationStdError / normalization;
+    return r * r;
+  }
+  // Z with the chains' large steps pooled in (common/mcmc/normalization.h): what the image is
+  // scaled by once the chains have run.
+  Normalization normalizationWith(const LargeStepSums& largeSteps) const {
+    return pooledNormalization(normalization, normalizationStdError, candidates, largeSteps);
+  }
+  double normalizationRelativeVariance(const LargeStepSums& largeSteps) const {
+    const Normalization z = normalizationWith(largeSteps);
+    if (!(z.value > 0)) return 0;
+    const double r = z.stdError / z.value;
     return r * r;
   }
 };
@@ -78,6 +90,9 @@ class RenderJob {
   std::vector<ChainSpec> planChains(const BootstrapResult& bootstrap) const;
   // image = imageScale * (sum of all flushes' splats); workDone = mutations/samples accepted.
   double imageScale(const BootstrapResult& bootstrap, int64_t workDone) const;
+  // The same with Z pooled from the bootstrap and the chains' large steps.
+  double imageScale(const BootstrapResult& bootstrap, int64_t workDone,
+                    const LargeStepSums& largeSteps) const;
 
   // Worker: runs a chain to its budget (or until onFlush returns false), calling onFlush every
   // spec.flushInterval mutations and once at the end. Deterministic for a given spec. When
@@ -89,7 +104,9 @@ class RenderJob {
   // Image from summed splats (double) and the scale above.
   Image resolve(const std::vector<double>& sums, double scale) const;
   // EXR header attributes describing this render.
-  ImageMetadata metadata(const BootstrapResult& bootstrap, int64_t workDone, double seconds) const;
+  // `largeSteps`: the chains' large steps, pooled into Z as imageScale() pools them.
+  ImageMetadata metadata(const BootstrapResult& bootstrap, int64_t workDone, double seconds,
+                         const LargeStepSums& largeSteps = LargeStepSums()) const;
 
  private:
   std::vector<ChainSpec> planTiles(const BootstrapResult& bootstrap) const;  // erpt

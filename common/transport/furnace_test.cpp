@@ -39,7 +39,7 @@ void expectFurnace(Algorithm algorithm, int maxDepth) {
     double se = st.stdError[c];
     if (isMarkovChain(algorithm)) {
       // The image scales with Z: its relative standard error adds to the pixels' spread.
-      double zRel = r.bootstrap.normalizationStdError / r.bootstrap.normalization;
+      double zRel = std::sqrt(r.bootstrap.normalizationRelativeVariance(r.largeSteps));
       se = std::sqrt(se * se + std::pow(expected * zRel, 2));
     }
     EXPECT_NEAR(st.mean[c], expected, 4 * se + 1e-6 * expected)
@@ -260,9 +260,10 @@ void expectIrradiance(Algorithm algorithm, FloorLight lightKind = FloorLight::Sp
   meanExpected /= n;
   double se = std::sqrt(variance) / n;
   if (isMarkovChain(algorithm)) {
-    double zRel = std::hypot(r[0].bootstrap.normalizationStdError / r[0].bootstrap.normalization,
-                             r[1].bootstrap.normalizationStdError / r[1].bootstrap.normalization) /
-                  2;
+    double zRel =
+        std::hypot(std::sqrt(r[0].bootstrap.normalizationRelativeVariance(r[0].largeSteps)),
+                   std::sqrt(r[1].bootstrap.normalizationRelativeVariance(r[1].largeSteps))) /
+        2;
     se = std::sqrt(se * se + std::pow(meanExpected * zRel, 2));
   }
   // The 1e-3 covers the 8 x 8 quadrature of each footprint.
