@@ -36,19 +36,14 @@ struct BootstrapResult {
   std::vector<std::string> seedPaths;
   std::vector<double> seedContributions;
 
-  // Var(Z) / Z^2, which scales every group's image alike (batch_means.h's zRelativeVariance);
-  // 0 without a Z.
-  double normalizationRelativeVariance() const {
-    if (!(normalization > 0)) return 0;
-    const double r = normalizationStdError / normalization;
-    return r * r;
-  }
   // Z with the chains' large steps pooled in (common/mcmc/normalization.h): what the image is
-  // scaled by once the chains have run.
+  // scaled by once the chains have run; without large steps, the bootstrap's own.
   Normalization normalizationWith(const LargeStepSums& largeSteps) const {
     return pooledNormalization(normalization, normalizationStdError, candidates, largeSteps);
   }
-  double normalizationRelativeVariance(const LargeStepSums& largeSteps) const {
+  // Var(Z) / Z^2 of that Z, which scales every group's image alike (batch_means.h's
+  // zRelativeVariance); 0 without a Z.
+  double normalizationRelativeVariance(const LargeStepSums& largeSteps = LargeStepSums()) const {
     const Normalization z = normalizationWith(largeSteps);
     if (!(z.value > 0)) return 0;
     const double r = z.stdError / z.value;
