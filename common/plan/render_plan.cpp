@@ -23,11 +23,21 @@ std::string number(double x) {
   return buf;
 }
 
+// Fog before the camera (kFoggy): the probes see glass through a medium's boundary, but the
+// specular-diffuse-specular rules (the candidates, the chains' count) were fitted in vacuum
+// (render_plan.h says why they do not hold there).
+bool foggy(const SceneAnalysis& s) {
+  return s.mediaSeen >= kFoggy;
+}
+bool someSdsRule(const SceneAnalysis& s) {
+  return s.someSpecularDiffuseSpecular() && !foggy(s);
+}
+
 // The pilot's candidates and why the others are not among them.
 void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
   for (const auto& [a, why] : s.refused)
     plan->notShortlisted.push_back(std::string(algorithmName(a)) + ": " + why);
-  if (s.specularDiffuseSpecular() && usable(s, Algorithm::MLT)) {
+  if (s.specularDiffuseSpecular() && !foggy(s) && usable(s, Algorithm::MLT)) {
     plan->shortlist = {Algorithm::MLT};
     plan->why =
         "light reaches the camera along specular-diffuse-specular paths (" +
@@ -47,7 +57,7 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
   // veach-bidir (1% of camera rays and 0.7% of light rays meet its glass first): bdpt's
   // relative MSE went from 0.004 to 0.087 in one second at 29 s, and ended at 0.041 at 100 s,
   // pt's at 0.034; the Markov chains spread such paths: mmlt 0.0022, mlt 0.0065, pssmlt 0.015.
-  const bool someSds = s.someSpecularDiffuseSpecular();
+  const bool someSds = someSdsRule(s);
   // Otherwise three candidates (a pilot takes 10% of the budget, a second each from 30 s), the
   // first being what renders without a pilot and unless the pilot finds another clearly
   // better. Fitted on the corpus's tuning half (tools/make_corpus.py; docs/corpus.md) and the
@@ -97,9 +107,14 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
         hidden ? std::vector<Algorithm>{Algorithm::MLT, Algorithm::Bidirectional, Algorithm::PSSMLT}
                : std::vector<Algorithm>{Algorithm::Bidirectional, Algorithm::PathTracing,
                                         Algorithm::PSSMLT};
-    why = "specular surfaces, but no specular-diffuse-specular light (" + percent(s.specularSeen) +
-          " seen, " + percent(s.specularLit) + " lit first), " + lit +
-          (hidden ? ": mlt first" : ": bdpt first");
+    why =
+        (foggy(s) && s.someSpecularDiffuseSpecular()
+             ? "specular surfaces seen through fog (" + percent(s.specularSeen) + " seen, " +
+                   percent(s.specularLit) + " lit first; the fog takes " + percent(s.mediaSeen) +
+                   " of the light along camera rays), "
+             : "specular surfaces, but no specular-diffuse-specular light (" +
+                   percent(s.specularSeen) + " seen, " + percent(s.specularLit) + " lit first), ") +
+        lit + (hidden ? ": mlt first" : ": bdpt first");
   }
   for (Algorithm a : wanted) {
     if (usable(s, a)) plan->shortlist.push_back(a);
@@ -169,7 +184,7 @@ void RenderPlan::choose(Algorithm chosen) {
   const bool mlt = algorithm == Algorithm::MLT;
   chains = 0;
   chainsReason.clear();
-  if (isMarkovChain(algorithm) && s.someSpecularDiffuseSpecular()) {
+  if (isMarkovChain(algorithm) && someSdsRule(s)) {
     chains = requestedChains > 0 ? requestedChains : kSdsChains;
     if (requestedChains > 0)
       chainsReason = "requested; the plan's would be " + std::to_string(kSdsChains);
@@ -309,7 +324,12 @@ std::vector<std::string> RenderPlan::describe() const {
   out.push_back(std::string("environment: ") +
                 (s.environment ? (s.environmentMap ? "map" : "constant") : "none"));
   out.push_back("media: " + std::to_string(s.homogeneousMedia) + " homogeneous, " +
-                std::to_string(s.gridMedia) + " grid");
+                std::to_string(s.gridMedia) + " grid" +
+                (s.hasMedia() ? "; they take " + percent(s.mediaSeen) +
+                                    " of the light along camera rays before the first surface"
+                              : ""));
+  for (const auto& [name, share] : s.mediaLookedThrough)
+    out.push_back("  the camera looks through " + name + " on " + percent(share) + " of its rays");
   if (!applied) {
     out.push_back(std::string("algorithm: ") + algorithmName(algorithm) +
                   " (--no-plan: every part the settings name, none left out)");

@@ -91,6 +91,18 @@ constexpr double kFewDirectlyLit = 0.35;
 // from the egg's caustic left 4.7x mmlt's mean relative MSE at 10 s) 0.7%.
 constexpr double kLightsInGlass = 0.9;
 
+// At least this share of the light along camera rays taken by media before the first surface
+// (SceneAnalysis::mediaSeen) is fog before the camera: there the specular-diffuse-specular
+// rules, fitted in vacuum (water-caustic, veach-bidir), do not pick the candidates, and a scene
+// with specular surfaces renders as one without such light. Fog scatters light towards the
+// camera from every depth, and pt and bdpt connect each scattering vertex to the lights; what
+// only a chain finds through the glass is a share of the image the fog has dimmed. On the
+// corpus's tuning half the fog around a glass ball under a small light (fog-0: the fog takes
+// 14% of the light along camera rays) left mmlt 2.0-2.3x the best's error and mlt 8-17x, where pt,
+// bdpt and pssmlt led, a few tens of percent apart (docs/corpus.md). A medium too thin to matter
+// (an extinction of 1e-6 over the room) takes about nothing and leaves the rules as in vacuum.
+constexpr double kFoggy = 0.05;
+
 // The plan for rendering with `requested` (ignored when automatic: the analysis picks the
 // shortlist and, until a pilot ranks it, its first entry), mlt's `requestedMix` and
 // `requestedChains` (0: the plan's).

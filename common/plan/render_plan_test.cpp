@@ -6,10 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "common/render/render_job.h"
 #include "common/scene/loaders/scene_loader.h"
+#include "common/scene/loaders/temp_dir_for_tests.h"
 #include "common/scene/scene.h"
 
 namespace farm {
@@ -209,6 +212,70 @@ TEST(RenderPlan, VeachMisAndAjar) {
   // The light is behind the door ajar: next to nothing the camera sees sees it.
   EXPECT_LT(a.scene.directlyLit, 0.02);
   EXPECT_GT(m.scene.directlyLit, kFewDirectlyLit);
+}
+
+// A camera looks along +z through a slab of fog (z in [1, 3], extinction sigma, no absorption)
+// at a glass ball (z = 4, radius 0.2) before a wall (z = 5), a small light above the ball.
+std::string fogSlab(double sigma) {
+  char medium[256];
+  std::snprintf(medium, sizeof(medium),
+                "<medium type=\"homogeneous\" id=\"fog\"><rgb name=\"sigmaA\" value=\"0, 0, "
+                "0\"/><rgb name=\"sigmaS\" value=\"%g, %g, %g\"/></medium>",
+                sigma, sigma, sigma);
+  return std::string(R"(<?xml version="1.0"?>
+<scene version="0.5.0">
+  <sensor type="perspective"><float name="fov" value="10"/>
+    <transform name="toWorld"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film>
+  </sensor>
+  )") + medium +
+         R"(
+  <shape type="rectangle"><transform name="toWorld"><scale x="10" y="10"/><rotate y="1" angle="180"/><translate x="0" y="0" z="5"/></transform><bsdf type="diffuse"/></shape>
+  <shape type="cube"><transform name="toWorld"><scale x="10" y="10" z="1"/><translate x="0" y="0" z="2"/></transform><ref name="interior" id="fog"/></shape>
+  <shape type="sphere"><point name="center" x="0" y="0" z="4"/><float name="radius" value="0.2"/><bsdf type="dielectric"><float name="intIOR" value="1.5"/></bsdf></shape>
+  <shape type="rectangle"><transform name="toWorld"><scale x="0.05" y="0.05"/><rotate x="1" angle="90"/><translate x="0" y="0.6" z="4"/></transform><emitter type="area"><rgb name="radiance" value="100, 100, 100"/></emitter></shape>
+</scene>
+)";
+}
+
+// The probes look through the faces of a box that only holds a medium (issue 43): they see the
+// glass behind it, and measure what the fog takes from the camera's rays against the closed
+// form 1 - exp(-sigma d / cos theta), d = 2 the slab's thickness, theta from 0 on the axis to
+// the film's corner. The ball, seen and lit, under a small light: in vacuum only mlt's
+// manifold walks connect its light; with the fog the plan leaves those rules, fitted in vacuum,
+// to the candidates of a scene without such light; with the fog nearly empty they hold.
+TEST(RenderPlan, TheProbesSeeGlassThroughAFogsBoundary) {
+  TempDir dir("render_plan_test");
+  const std::string fogFile = dir.write("fog/scene.xml", fogSlab(0.5));
+  const RenderPlan fog = plan(fogFile, Algorithm::PSSMLT, true);
+  EXPECT_EQ(fog.scene.homogeneousMedia, 1);
+  // The ball's disc covers pi tan^2(asin(0.2 / 4)) of the film's (2 tan 5 deg)^2.
+  const double half = std::tan(5.0 * M_PI / 180);
+  const double disc = M_PI * std::pow(std::tan(std::asin(0.05)), 2) / (4 * half * half);
+  EXPECT_NEAR(fog.scene.specularSeen, disc, 0.02) << "the ball, seen through the fog's box";
+  EXPECT_GT(fog.scene.specularLit, 0.02) << "the light above the ball lights it";
+  const double cosCorner = 1 / std::sqrt(1 + 2 * half * half);
+  EXPECT_GT(fog.scene.mediaSeen, 1 - std::exp(-1.0) - 1e-4);
+  EXPECT_LT(fog.scene.mediaSeen, 1 - std::exp(-1.0 / cosCorner) + 1e-4);
+  ASSERT_EQ(fog.scene.mediaLookedThrough.size(), 1u);
+  EXPECT_EQ(fog.scene.mediaLookedThrough[0].first, "fog");
+  EXPECT_EQ(fog.scene.mediaLookedThrough[0].second, 1.0) << "every camera ray crosses the slab";
+  EXPECT_TRUE(fog.scene.specularDiffuseSpecular());
+  ASSERT_FALSE(fog.shortlist.empty());
+  EXPECT_EQ(fog.shortlist.front(), Algorithm::Bidirectional);
+  EXPECT_FALSE(candidate(fog, Algorithm::MLT));
+  EXPECT_FALSE(candidate(fog, Algorithm::MMLT));
+  EXPECT_NE(fog.why.find("seen through fog"), std::string::npos) << fog.why;
+  EXPECT_EQ(plan(fogFile, Algorithm::MMLT, false).chains, 0)
+      << "the chains' count for specular-diffuse-specular light was fitted in vacuum";
+
+  const std::string clearFile = dir.write("clear/scene.xml", fogSlab(1e-6));
+  const RenderPlan clear = plan(clearFile, Algorithm::PSSMLT, true);
+  EXPECT_LT(clear.scene.mediaSeen, 1e-5);
+  EXPECT_NEAR(clear.scene.specularSeen, fog.scene.specularSeen, 1e-9);
+  ASSERT_FALSE(clear.shortlist.empty());
+  EXPECT_EQ(clear.shortlist, std::vector<Algorithm>{Algorithm::MLT}) << clear.why;
+  EXPECT_EQ(plan(clearFile, Algorithm::MMLT, false).chains, kSdsChains);
 }
 
 TEST(RenderPlan, ALensAnEnvironmentAndMediaAreInAndNarrowTheCandidates) {

@@ -22,31 +22,85 @@ double shapeArea(const ShapeDescription& s) {
   return area;
 }
 
+// The probes see geometry through the surfaces that only bound media (null boundaries): the
+// first surface along a ray that is not one, or false when the ray leaves the scene (or passes
+// more boundaries than any scene nests).
+constexpr int kMaxNullBoundaries = 16;
+bool firstSurface(const Scene& scene, Ray ray, SurfaceHit* hit) {
+  for (int k = 0; k <= kMaxNullBoundaries; ++k) {
+    if (!scene.intersect(ray, hit)) return false;
+    if (!scene.isNullBoundary(hit->shape)) return true;
+    ray = scene.spawnRay(hit->p, hit->ng, ray.d);
+  }
+  return false;
+}
+
 // Whether the first surface a ray meets is specular (and -1 when it meets none).
 int firstHitSpecular(const Scene& scene, const Ray& ray) {
   SurfaceHit hit;
-  if (!scene.intersect(ray, &hit)) return -1;
+  if (!firstSurface(scene, ray, &hit)) return -1;
   return scene.bsdfOf(hit.shape).isDelta() ? 1 : 0;
 }
 
-// The probes see the scene's geometry only (no media, no visibility of the environment): they
-// tell where specular surfaces sit relative to the camera and the lights.
+// Each probe sends this many rays (a seeded or fixed set: the same scene, the same plan).
 constexpr int kProbeRays = 4096;
 
-double probeCamera(const Scene& scene) {
+// The camera's probe rays: one through the centre of each cell of a square grid on the film.
+template <typename Visit>
+void forEachCameraProbe(const Scene& scene, const Visit& visit) {
   const Camera& camera = scene.camera();
   const int side = int(std::sqrt(double(kProbeRays)));
-  int hits = 0, specular = 0;
   for (int j = 0; j < side; ++j) {
     for (int i = 0; i < side; ++i) {
-      const Vec2f film((float(i) + 0.5f) / float(side) * float(camera.width()),
-                       (float(j) + 0.5f) / float(side) * float(camera.height()));
-      const int s = firstHitSpecular(scene, camera.generateRay(film));
-      hits += s >= 0;
-      specular += s > 0;
+      visit(camera.generateRay(Vec2f((float(i) + 0.5f) / float(side) * float(camera.width()),
+                                     (float(j) + 0.5f) / float(side) * float(camera.height()))));
     }
   }
+}
+
+double probeCamera(const Scene& scene) {
+  int hits = 0, specular = 0;
+  forEachCameraProbe(scene, [&](const Ray& ray) {
+    const int s = firstHitSpecular(scene, ray);
+    hits += s >= 0;
+    specular += s > 0;
+  });
   return hits > 0 ? double(specular) / hits : 0;
+}
+
+// The share of the light along the camera's rays that media take (scatter or absorb) before
+// the first surface: the mean over the probe's rays of 1 - T, T the transmittance's luminance
+// from the camera to that surface through the null boundaries on the way (exact in a
+// homogeneous medium, a fine midpoint rule in a grid); and for each medium, the share of the
+// rays that cross it. A ray that leaves the scene counts as clear: an open medium around the
+// camera is not measured.
+constexpr int kMarchSteps = 256;
+double probeMediaSeen(const Scene& scene, std::vector<double>* crossedBy) {
+  const size_t media = scene.description().media.size();
+  crossedBy->assign(media, 0.0);
+  int rays = 0;
+  double taken = 0;
+  std::vector<MediumSegment> segments;
+  std::vector<char> crossed(media);
+  forEachCameraProbe(scene, [&](const Ray& ray) {
+    ++rays;
+    SurfaceHit hit;
+    int arrival = -1;
+    if (!firstSurface(scene, ray, &hit) ||
+        !scene.mediumSegments(ray.o, Vec3f(0.0f), hit.p, hit.ng, scene.cameraMedium(), &segments,
+                              &arrival))
+      return;
+    Spectrum t(1.0f);
+    std::fill(crossed.begin(), crossed.end(), 0);
+    for (const MediumSegment& m : segments) {
+      t = t * scene.medium(m.medium).marchedTransmittance(m.start, m.d, m.length, kMarchSteps);
+      crossed[size_t(m.medium)] = 1;
+    }
+    taken += 1.0 - double(luminance(t));
+    for (size_t k = 0; k < media; ++k) (*crossedBy)[k] += crossed[k];
+  });
+  for (double& c : *crossedBy) c = rays > 0 ? c / rays : 0;
+  return rays > 0 ? taken / rays : 0;
 }
 
 double probeLights(const Scene& scene) {
@@ -83,46 +137,33 @@ double probeLights(const Scene& scene) {
 // carry. Environment lights are not sampled here (open scenes see their sky); with no other
 // light it is 1.
 double probeDirectLight(const Scene& scene) {
-  const Camera& camera = scene.camera();
-  const int side = int(std::sqrt(double(kProbeRays)));
   Rng rng(2, 0x9e3779b97f4a7c15ull);
   int seen = 0, lit = 0;
-  for (int j = 0; j < side; ++j) {
-    for (int i = 0; i < side; ++i) {
-      const Vec2f film((float(i) + 0.5f) / float(side) * float(camera.width()),
-                       (float(j) + 0.5f) / float(side) * float(camera.height()));
-      // Through the boundaries that only hold media (the probes see geometry, not fog).
-      SurfaceHit hit;
-      Ray ray = camera.generateRay(film);
-      bool found = scene.intersect(ray, &hit);
-      for (int k = 0; found && scene.isNullBoundary(hit.shape) && k < 16; ++k) {
-        ray = scene.spawnRay(hit.p, hit.ng, ray.d);
-        found = scene.intersect(ray, &hit);
-      }
-      if (!found || scene.isNullBoundary(hit.shape) || scene.bsdfOf(hit.shape).isDelta()) continue;
-      float pdf = 0;
-      const int light = scene.pickLight(rng.nextFloat(), &pdf);
-      const AreaLight& l = scene.lights()[size_t(light)];
-      if (l.isEnvironment()) continue;
-      ++seen;
-      if (scene.lightOf(hit.shape) >= 0) {
-        ++lit;
-        continue;
-      }
-      Vec3f p, n(0.0f);
-      if (l.isPoint()) {
-        p = scene.pointLight(light).position();
-      } else {
-        const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
-        scene.sampleLightPoint(light, u, &p, &n);
-        if (dot(n, hit.p - p) <= 0) continue;  // the light's back: it emits from one side
-      }
-      std::vector<MediumSegment> segments;
-      int arrival = -1;
-      lit += scene.hasMedia() ? scene.mediumSegments(hit.p, hit.ng, p, n, -1, &segments, &arrival)
-                              : scene.visible(hit.p, hit.ng, p, n);
+  std::vector<MediumSegment> segments;
+  forEachCameraProbe(scene, [&](const Ray& ray) {
+    SurfaceHit hit;
+    if (!firstSurface(scene, ray, &hit) || scene.bsdfOf(hit.shape).isDelta()) return;
+    float pdf = 0;
+    const int light = scene.pickLight(rng.nextFloat(), &pdf);
+    const AreaLight& l = scene.lights()[size_t(light)];
+    if (l.isEnvironment()) return;
+    ++seen;
+    if (scene.lightOf(hit.shape) >= 0) {
+      ++lit;
+      return;
     }
-  }
+    Vec3f p, n(0.0f);
+    if (l.isPoint()) {
+      p = scene.pointLight(light).position();
+    } else {
+      const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
+      scene.sampleLightPoint(light, u, &p, &n);
+      if (dot(n, hit.p - p) <= 0) return;  // the light's back: it emits from one side
+    }
+    int arrival = -1;
+    lit += scene.hasMedia() ? scene.mediumSegments(hit.p, hit.ng, p, n, -1, &segments, &arrival)
+                            : scene.visible(hit.p, hit.ng, p, n);
+  });
   return seen > 0 ? double(lit) / seen : 1.0;
 }
 
@@ -233,6 +274,15 @@ SceneAnalysis analyseScene(const Scene& scene) {
       ++a.gridMedia;
     } else {
       ++a.homogeneousMedia;
+    }
+  }
+  if (a.hasMedia()) {
+    std::vector<double> crossedBy;
+    a.mediaSeen = probeMediaSeen(scene, &crossedBy);
+    for (size_t k = 0; k < d.media.size(); ++k) {
+      if (crossedBy[k] > 0)
+        a.mediaLookedThrough.push_back(
+            {d.media[k].id.empty() ? d.media[k].origin : d.media[k].id, crossedBy[k]});
     }
   }
   a.maxDepth = d.maxDepth;

@@ -1,9 +1,10 @@
 #pragma once
 // What a scene has that decides how to render it (DESIGN.md, "Leave out what a scene does not
 // need"): its surfaces by kind, its lights and their sizes and powers, its camera, textures,
-// environment and media, and two probes of where specular surfaces sit on the light's way:
-// the share of camera rays whose first hit is specular, and the share of light rays whose
-// first hit is. render_plan.h turns this into a plan.
+// environment and media, and probes: where specular surfaces sit on the light's way (the share
+// of camera rays whose first hit is specular, and the share of light rays whose first hit is),
+// how much of what the camera sees sees a light, and how much light media take from the
+// camera's rays. render_plan.h turns this into a plan.
 #include <string>
 #include <utility>
 #include <vector>
@@ -57,8 +58,17 @@ struct SceneAnalysis {
   int maxDepth = -1;
   // Probes (a fixed, seeded set of rays): the share of camera rays through the film whose first
   // hit is a specular surface, and of rays leaving the lights (by power) whose first hit is.
+  // Both look through the surfaces that only bound media (a glass ball in a fog-filled box is
+  // seen and lit through the box's faces).
   double specularSeen = 0, specularLit = 0;
   int probeRays = 0;
+  // The share of the light along camera rays that media take (scatter or absorb) before the
+  // first surface (scene_analysis.cpp: probeMediaSeen): 0 in vacuum, and about 0 in a medium
+  // too thin to matter.
+  double mediaSeen = 0;
+  // The media the camera looks through: each one's name (its id, or where the file gives it)
+  // and the share of camera rays that cross it before their first surface.
+  std::vector<std::pair<std::string, double>> mediaLookedThrough;
   // The share of camera rays whose first (non-specular) hit sees a point sampled on a light
   // (scene_analysis.cpp: probeDirectLight); 1 with no finite light.
   double directlyLit = 1;
