@@ -10,6 +10,10 @@ render's and the reference's errors are independent, so the measured relative MS
 sum, and left in it would draw every ratio toward 1.
 
 Writes OUT/<scene>/seed-<n>/ (compare reports, auto-<seconds>/), OUT/table.md and OUT/table.json.
+The last column rescales each render's error to its algorithm's median samples a second over the
+scene's renders in the run (relative MSE falls as 1 / samples): the machine's speed scatters by
+tens of percent between renders of one sitting, and this takes that scatter out of the ratios,
+leaving the pick, the pilot's share of the budget and the renders' own noise.
 
     bench/corpus_table.py CORPUS OUT [--half measure|tune|all] [--times 10 30] [--seeds 1 2 3]
                           [--algorithms pt,bdpt,pssmlt,mmlt,mlt] [--size 64] [--table-only] [--no-auto]
@@ -88,13 +92,45 @@ def main():
     tabulate(args, scenes, algorithms, times)
 
 
+def speed(path):
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f).get("samples_per_second") or None
+
+
+def median(xs):
+    xs = sorted(xs)
+    return 0.5 * (xs[(len(xs) - 1) // 2] + xs[len(xs) // 2]) if xs else None
+
+
 def tabulate(args, scenes, algorithms, times):
     rows = []
     for s in scenes:
         with open(os.path.join(args.corpus, os.path.dirname(s["scene"]), "reference.json")) as f:
             floor = json.load(f)["reference_relmse"]
+        # The machine's speed scatters between renders of one sitting (docs/corpus.md): each
+        # algorithm's median samples a second over this scene's renders of it, to which the
+        # speed-corrected errors rescale each render (relative MSE falls as 1 / samples).
+        speeds = {}
+        for seed in args.seeds:
+            d = os.path.join(args.out, s["name"], "seed-%d" % seed)
+            for a in algorithms:
+                v = speed(os.path.join(d, a, "report.json"))
+                if v:
+                    speeds.setdefault(a, []).append(v)
+            for t in times:
+                auto = os.path.join(d, "auto-%g" % t, "report.json")
+                if os.path.exists(auto):
+                    with open(auto) as f:
+                        report = json.load(f)
+                    if report.get("samples_per_second"):
+                        speeds.setdefault(report.get("algorithm"), []).append(
+                            report["samples_per_second"])
+        typical = {a: median(v) for a, v in speeds.items()}
         for t in times:
             errors = {a: [] for a in algorithms + ["auto"]}
+            corrected = {a: [] for a in algorithms + ["auto"]}
             picks = []
             for seed in args.seeds:
                 d = os.path.join(args.out, s["name"], "seed-%d" % seed)
@@ -103,6 +139,9 @@ def tabulate(args, scenes, algorithms, times):
                     e = at(series(p), t) if os.path.exists(p) else None
                     if e is not None:
                         errors[a].append(e - floor)
+                        v = speed(os.path.join(d, a, "report.json"))
+                        if v and typical.get(a):
+                            corrected[a].append((e - floor) * v / typical[a])
                 auto = os.path.join(d, "auto-%g" % t)
                 if os.path.exists(os.path.join(auto, "report.json")):
                     with open(os.path.join(auto, "report.json")) as f:
@@ -110,29 +149,45 @@ def tabulate(args, scenes, algorithms, times):
                     if report.get("relmse") is not None:
                         errors["auto"].append(report["relmse"] - floor)
                         picks.append(report.get("algorithm", "?"))
+                        v, a = report.get("samples_per_second"), report.get("algorithm")
+                        if v and typical.get(a):
+                            corrected["auto"].append((report["relmse"] - floor) * v / typical[a])
             mean = {a: sum(e) / len(e) for a, e in errors.items() if e}
             single = {a: e for a, e in mean.items() if a != "auto"}
             best = min(single, key=single.get) if single else None
             ratio = mean["auto"] / single[best] if best and "auto" in mean else None
+            cmean = {a: sum(e) / len(e) for a, e in corrected.items()
+                     if e and len(e) == len(errors[a])}
+            csingle = {a: e for a, e in cmean.items() if a != "auto"}
+            cbest = min(csingle, key=csingle.get) if csingle else None
+            cratio = cmean["auto"] / csingle[cbest] if cbest and "auto" in cmean else None
             rows.append({"scene": s["name"], "family": s["family"], "half": s["half"],
                          "seconds": t, "relmse": mean, "best": best, "auto_picks": picks,
-                         "ratio": ratio, "reference_relmse": floor})
+                         "ratio": ratio, "reference_relmse": floor,
+                         "speed_corrected_relmse": cmean, "speed_corrected_best": cbest,
+                         "speed_corrected_ratio": cratio,
+                         "samples_per_second": {a: v for a, v in speeds.items()}})
     lines = ["| scene | half | s | " + " | ".join(algorithms) + " | best | auto (picks) | "
-             "auto / best |", "|---|---|---|" + "---|" * (len(algorithms) + 3)]
+             "auto / best | at median speed: best, auto / best |",
+             "|---|---|---|" + "---|" * (len(algorithms) + 4)]
     for r in rows:
         cells = ["%.3g" % r["relmse"][a] if a in r["relmse"] else "-" for a in algorithms]
-        lines.append("| %s | %s | %g | %s | %s | %s (%s) | %s |" % (
+        lines.append("| %s | %s | %g | %s | %s | %s (%s) | %s | %s, %s |" % (
             r["scene"], r["half"], r["seconds"], " | ".join(cells), r["best"] or "-",
             "%.3g" % r["relmse"]["auto"] if "auto" in r["relmse"] else "-",
-            ",".join(r["auto_picks"]), "%.2f" % r["ratio"] if r["ratio"] else "-"))
+            ",".join(r["auto_picks"]), "%.2f" % r["ratio"] if r["ratio"] else "-",
+            r["speed_corrected_best"] or "-",
+            "%.2f" % r["speed_corrected_ratio"] if r["speed_corrected_ratio"] else "-"))
     lines.append("")
     for t in times:
-        ratios = [r["ratio"] for r in rows if r["seconds"] == t and r["ratio"]]
-        if ratios:
-            lines.append("%g s: auto within 1.2x of the best on %d of %d scenes, worst %.2fx, "
-                         "geometric mean %.2fx" % (
-                             t, sum(x <= 1.2 for x in ratios), len(ratios), max(ratios),
-                             math.exp(sum(math.log(x) for x in ratios) / len(ratios))))
+        for key, what in (("ratio", ""), ("speed_corrected_ratio", " (at median speed)")):
+            ratios = [r[key] for r in rows if r["seconds"] == t and r[key]]
+            if ratios:
+                lines.append("%g s%s: auto within 1.2x of the best on %d of %d scenes, worst "
+                             "%.2fx, geometric mean %.2fx" % (
+                                 t, what, sum(x <= 1.2 for x in ratios), len(ratios),
+                                 max(ratios),
+                                 math.exp(sum(math.log(x) for x in ratios) / len(ratios))))
     table = "\n".join(lines) + "\n"
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "table.md"), "w") as f:
