@@ -144,6 +144,7 @@ Status runCompare(const CompareOptions& o, CompareResult* result) {
     RenderSettings settings = o.settings;
     settings.algorithm = choice.algorithm;
     settings.autoAlgorithm = choice.automatic;
+    settings.pilot = choice.automatic && o.settings.pilot;  // --pilot is auto's alone
     JobProgress progress;
     Image image;
     ImageMetadata metadata;

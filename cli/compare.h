@@ -19,7 +19,7 @@
 
 namespace farm {
 
-// One job of a comparison: an algorithm, or auto (the plan's pick after its pilot).
+// One job of a comparison: an algorithm, or auto (the plan's pick; with --pilot, its pilot's).
 struct AlgorithmChoice {
   Algorithm algorithm = Algorithm::PSSMLT;
   bool automatic = false;

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -69,6 +70,7 @@ struct RenderOptions {
   double untilError = 0;
   int errorGroups = 0;
   bool noPlan = false;
+  bool pilot = false;
   std::string shadingNormals = "scene";
   int maxDepth = 0;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
@@ -80,9 +82,9 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "pt (path tracing), bdpt (bidirectional), pssmlt (primary-sample MLT over "
                    "bdpt), pssmlt-pt (the same over pt), mmlt (multiplexed MLT), mlt (path-space "
                    "MLT with Veach's mutations), erpt (energy redistribution path tracing), "
-                   "auto (the scene's plan picks one: `farm plan SCENE` shows how; where it "
-                   "names several candidates, a pilot of each, 10% of --time in all or 1 s "
-                   "each, ranks them by estimated error x time)")
+                   "auto (the scene's plan picks one, its first candidate: `farm plan SCENE` "
+                   "shows how and why; with --pilot a short render of each candidate ranks "
+                   "them)")
       ->default_str("pssmlt");
   command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt), seeds per pixel (erpt)")
       ->default_str("16");
@@ -155,6 +157,11 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "coordinator keeps a film for each. 1: no estimate, one film; 0: " +
                        std::to_string(farm::kErrorGroups))
       ->default_str("0");
+  command->add_flag("--pilot", o->pilot,
+                    "with --algorithm auto: a pilot of each of the plan's candidates, 10% of "
+                    "--time in all or 1 s each, ranks them by estimated error x time, and one "
+                    "under half the first's renders (off by default: on the corpus it cost "
+                    "more than it saved, docs/corpus.md)");
   command->add_flag(
       "--no-plan", o->noPlan,
       "keep every part the settings name, even those the scene's plan leaves out (mlt's "
@@ -209,6 +216,7 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     return false;
   }
   s->ignorePlan = o.noPlan;
+  s->pilot = o.pilot;
   if (!parseShadingNormalsOption(o.shadingNormals, &s->shadingNormals, error)) return false;
   constexpr int64_t kMaxPerPixel = int64_t(1) << 24;
   if (o.spp < 1 || o.spp > kMaxPerPixel) {
@@ -539,9 +547,16 @@ int runCompareCommand(const std::string& scene, const std::string& algorithms,
                       const std::string& reportDir) {
   farm::CompareOptions compare;
   std::string error;
-  if (!toSettings(options, &compare.settings, &error)) return fail(error, kUsageError);
+  // --pilot goes to auto's job alone (runCompare), so the shared settings check it not.
+  RenderOptions shared = options;
+  shared.pilot = false;
+  if (!toSettings(shared, &compare.settings, &error)) return fail(error, kUsageError);
   if (!farm::parseAlgorithms(algorithms, &compare.algorithms, &error))
     return fail(error, kUsageError);
+  compare.settings.pilot = options.pilot;
+  if (options.pilot && std::none_of(compare.algorithms.begin(), compare.algorithms.end(),
+                                    [](const farm::AlgorithmChoice& c) { return c.automatic; }))
+    return fail("--pilot ranks auto's candidates: --algorithms names no auto", kUsageError);
   if (!fs::is_regular_file(scene)) return fail("scene file '" + scene + "' does not exist");
   if (!options.reference.empty() && !fs::is_regular_file(options.reference))
     return fail("reference '" + options.reference + "' does not exist");
@@ -593,10 +608,9 @@ int runPlan(const std::string& scenePath, const std::string& algorithm,
   settings.timeBudgetSeconds = time;
   settings.width = width;
   settings.height = height;
+  settings.pilot = pilot;
   if (std::string problem = settings.validate(); !problem.empty())
     return fail(problem, kUsageError);
-  if (pilot && !settings.autoAlgorithm)
-    return fail("--pilot ranks auto's candidates: it needs --algorithm auto", kUsageError);
   if (!fs::is_regular_file(scenePath)) return fail("scene file '" + scenePath + "' does not exist");
   farm::RenderPlan plan;
   try {

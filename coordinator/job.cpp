@@ -120,9 +120,11 @@ void Job::prepare() {
     const auto loadStart = SteadyClock::now();
     std::shared_ptr<Scene> scene = loadScene(spec_.scenePath, spec_.settings);
     for (const std::string& w : scene->description().warnings) log("scene warning: " + w);
-    // The plan (and with --algorithm auto its pilot) settles the settings the chains run with.
+    // The plan (and with --algorithm auto --pilot its pilot) settles the settings the chains run
+    // with.
     RenderSettings settings = spec_.settings;
-    if (settings.autoAlgorithm) log("planning: a pilot ranks the plan's candidates");
+    if (settings.autoAlgorithm && settings.pilot)
+      log("planning: a pilot ranks the plan's candidates");
     const RenderPlan plan = planJob(scene, &settings, [this] { return !cancelRequested_.load(); });
     std::vector<std::string> planLines = plan.describe();
     for (const std::string& line : planLines) log("plan: " + line);

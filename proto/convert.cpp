@@ -88,6 +88,7 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_until_error(settings.untilError);
   m.set_error_groups(settings.errorGroups);
   m.set_auto_algorithm(settings.autoAlgorithm);
+  m.set_pilot(settings.pilot);
   m.set_ignore_plan(settings.ignorePlan);
   m.set_shading_normals(
       settings.shadingNormals == ShadingNormals::Strict ? v1::SHADING_NORMALS_STRICT
@@ -118,6 +119,7 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.untilError = m.until_error();
   s.errorGroups = m.error_groups();
   s.autoAlgorithm = m.auto_algorithm();
+  s.pilot = m.pilot();
   s.ignorePlan = m.ignore_plan();
   switch (m.shading_normals()) {
     case v1::SHADING_NORMALS_SCENE:

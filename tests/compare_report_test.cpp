@@ -66,13 +66,13 @@ TEST(FarmCompare, RendersEachAlgorithmAndWritesTheReport) {
   ScratchDir scratch("compare");
   const std::string dir = scratch / "report";
   CommandResult r = runCommand(
-      {FARM_CLI_BIN, "compare", kScene, "--algorithms", "pt,bdpt,pssmlt,auto", "--width", "48",
-       "--height", "48", "--spp", "8", "--mpp", "8", "--threads", "2", "--report", dir},
+      {FARM_CLI_BIN, "compare", kScene, "--algorithms", "pt,bdpt,pssmlt,auto", "--pilot", "--width",
+       "48", "--height", "48", "--spp", "8", "--mpp", "8", "--threads", "2", "--report", dir},
       seconds(180), scratch.path());
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_EQ(r.err.find("no chart"), std::string::npos) << r.err;
   expectReport(dir, {"pt", "bdpt", "pssmlt", "auto"});
-  // Each job's plan is on the page, auto's with its pilot.
+  // Each job's plan is on the page, auto's with its pilot (--pilot is auto's alone).
   const std::string html = readFile(dir + "/index.html");
   EXPECT_EQ(count(html, "<h3>"), 4u);  // the Cornell box: pt, bdpt and pssmlt, a second each
   EXPECT_NE(html.find("left out: lens sampling"), std::string::npos);

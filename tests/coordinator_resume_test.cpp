@@ -350,6 +350,7 @@ TEST(DurableResumeAuto, ARestartKeepsThePilotsPickAndThePlan) {
   testing::ScratchDir scratch("durable-auto");
   RenderSettings settings = smallJob(Algorithm::PSSMLT);
   settings.autoAlgorithm = true;
+  settings.pilot = true;
   CoordinatorOptions options;
   options.dataDir = scratch / "data";
   options.durable = true;

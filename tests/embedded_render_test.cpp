@@ -271,11 +271,12 @@ TEST(EmbeddedRender, ShadingNormalsOverrideTheScenes) {
 
 // --until-error: the job stops once the error estimated from its chain groups is there,
 // long before its budget, and says so; the report's CSV carries the estimate with no reference.
-// --algorithm auto: the pilot takes about a tenth of the budget, the job renders with its pick,
-// and the report says what the plan chose and why.
+// --algorithm auto --pilot: the pilot takes about a tenth of the budget, the job renders with its
+// pick, and the report says what the plan chose and why.
 TEST(EmbeddedRender, AutoRendersWithThePilotsPickAndReportsThePlan) {
   EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 2, 1);
   o.settings.autoAlgorithm = true;
+  o.settings.pilot = true;
   o.settings.bootstrapSamples = 0;
   // Counts, not a budget: a pilot of a second a candidate.
   EmbeddedRenderResult result;

@@ -58,16 +58,15 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
   // relative MSE went from 0.004 to 0.087 in one second at 29 s, and ended at 0.041 at 100 s,
   // pt's at 0.034; the Markov chains spread such paths: mmlt 0.0022, mlt 0.0065, pssmlt 0.015.
   const bool someSds = someSdsRule(s);
-  // Otherwise three candidates (a pilot takes 10% of the budget, a second each from 30 s), the
-  // first being what renders without a pilot and unless the pilot finds another clearly
-  // better. Fitted on the corpus's tuning half (tools/make_corpus.py; docs/corpus.md) and the
-  // shared scenes: where the lights are in sight of most of what the camera sees, pt and bdpt
-  // lead, a few tens of percent apart either way, and the Markov chains leave 3-35x their error
-  // (mlt 12x on glass and metal objects, 19-35x under an environment). pt first without
-  // specular surfaces (within 1.2x of bdpt on every such tuning scene; bdpt first under small
-  // lights, as before, left 1.6x under a tiny one; veach-mis, whose glossy plates favour
-  // bdpt, pays 1.14-1.27x); bdpt first with them (light tracing reaches caustics that pt must
-  // hit a light for: 2.3-2.8x pt's error under the environment's sun). Where the lights are
+  // Otherwise three candidates, the first being what renders (with --pilot, unless the pilot
+  // finds another clearly better). Fitted on the corpus's tuning half (tools/make_corpus.py;
+  // docs/corpus.md) and the shared scenes: where the lights are in sight of most of what the camera
+  // sees, pt and bdpt lead, a few tens of percent apart either way, and the Markov chains leave
+  // 3-35x their error (mlt 12x on glass and metal objects, 19-35x under an environment). pt first
+  // without specular surfaces (within 1.2x of bdpt on every such tuning scene; bdpt first under
+  // small lights, as before, left 1.6x under a tiny one; veach-mis, whose glossy plates favour
+  // bdpt, pays 1.14-1.27x); with them, pt first in a room, bdpt first under an environment or
+  // in fog (below). Where the lights are
   // hidden from most of it (SceneAnalysis::directlyLit), next-event estimation mostly meets
   // the occluder: bdpt first without specular surfaces (the boxed-in light: pt 11x bdpt's
   // error) and mlt first with them (veach-ajar's door: mlt led at 10, 30 and 100 s, 0.011 at
@@ -103,10 +102,21 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
                                              Algorithm::PSSMLT};
     why = "no specular surfaces, " + lit + (hidden ? ": bdpt first" : ": pt first");
   } else {
+    // In sight of the lights, pt reaches a caustic by sampling its BSDF into the light after the
+    // specular bounce, as often as the light is wide seen from there. Under a room's ceiling
+    // light that is often enough and pt's samples are cheaper (the tuning half's glass and metal
+    // objects, and its glass ball in fog too thin to count, seeds 1-3: bdpt 1.12-1.26x pt's
+    // error); the environment's sun is a few degrees of the sky, which bdpt's light subpaths
+    // start from (pt 2.5-3.1x bdpt's error), and in fog before the camera bdpt's light subpaths
+    // scatter in the medium and connect (fog-0: pt 1.22x bdpt's). docs/corpus.md, "pt or bdpt
+    // first with specular surfaces".
+    const bool ptFirst = !hidden && !s.environment && !foggy(s);
     wanted =
         hidden ? std::vector<Algorithm>{Algorithm::MLT, Algorithm::Bidirectional, Algorithm::PSSMLT}
-               : std::vector<Algorithm>{Algorithm::Bidirectional, Algorithm::PathTracing,
-                                        Algorithm::PSSMLT};
+        : ptFirst ? std::vector<Algorithm>{Algorithm::PathTracing, Algorithm::Bidirectional,
+                                           Algorithm::PSSMLT}
+                  : std::vector<Algorithm>{Algorithm::Bidirectional, Algorithm::PathTracing,
+                                           Algorithm::PSSMLT};
     why =
         (foggy(s) && s.someSpecularDiffuseSpecular()
              ? "specular surfaces seen through fog (" + percent(s.specularSeen) + " seen, " +
@@ -114,7 +124,11 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
                    " of the light along camera rays), "
              : "specular surfaces, but no specular-diffuse-specular light (" +
                    percent(s.specularSeen) + " seen, " + percent(s.specularLit) + " lit first), ") +
-        lit + (hidden ? ": mlt first" : ": bdpt first");
+        lit +
+        (hidden     ? ": mlt first"
+         : ptFirst  ? ": pt first"
+         : foggy(s) ? ": bdpt first (its light subpaths scatter in the fog)"
+                    : ": bdpt first (its light subpaths start from the environment's sun)");
   }
   for (Algorithm a : wanted) {
     if (usable(s, a)) plan->shortlist.push_back(a);

@@ -35,6 +35,7 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
   PilotFigure figure;
   figure.algorithm = settings.algorithm;
   settings.autoAlgorithm = false;
+  settings.pilot = false;
   settings.timeBudgetSeconds = seconds;
   settings.untilError = 0;
   settings.errorGroups = kPilotGroups;
@@ -177,7 +178,9 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
     if (plan.shortlist.empty())
       throw std::runtime_error("no algorithm of this build can render this scene");
     const double seconds = pilotSecondsEach(*settings, plan.shortlist.size());
-    if (plan.shortlist.size() > 1 && seconds <= 0) {
+    if (plan.shortlist.size() > 1 && !settings->pilot) {
+      plan.why += "; no pilot (--pilot runs one), so the first renders";
+    } else if (plan.shortlist.size() > 1 && seconds <= 0) {
       plan.why += "; no pilot: " + std::to_string(int(100 * kPilotShare)) + "% of the budget " +
                   "gives each candidate under " + std::to_string(kPilotMinSeconds).substr(0, 4) +
                   " s, so the first renders";
@@ -205,6 +208,7 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
     }
     settings->algorithm = plan.algorithm;
     settings->autoAlgorithm = false;
+    settings->pilot = false;
   }
   if (settings->ignorePlan) {
     plan.applied = false;

@@ -1,10 +1,10 @@
 #pragma once
-// Planning a job (common/plan/render_plan.h) and, for --algorithm auto, the pilot that ranks
-// the plan's candidates: each renders for a few seconds in this process, its chains in
-// independent groups whose spread estimates its relative MSE without a reference
-// (common/film/batch_means.h); with three or more candidates each one's error is also
-// estimated from how its image differs from the others' (common/film/cross_estimate.h), which
-// sees light it has not found and they have, and the larger estimate counts. The candidate
+// Planning a job (common/plan/render_plan.h) and, for --algorithm auto --pilot, the pilot that
+// ranks the plan's candidates (without --pilot the plan's first renders): each renders for a few
+// seconds in this process, its chains in independent groups whose spread estimates its relative MSE
+// without a reference (common/film/batch_means.h); with three or more candidates each one's error
+// is also estimated from how its image differs from the others' (common/film/cross_estimate.h),
+// which sees light it has not found and they have, and the larger estimate counts. The candidate
 // whose estimate times its render time is least renders the job. Relative MSE falls as 1 / time for
 // every algorithm here, so that product is what one second of the candidate would leave: a pilot of
 // equal seconds each ranks them as the job would, up to the pilot's noise. The bootstrap's own time
@@ -52,8 +52,8 @@ std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
 Algorithm pilotPick(Algorithm first, const std::vector<PilotFigure>& figures);
 
 // The job's plan, applied to *settings: with settings->autoAlgorithm the algorithm the plan
-// (and its pilot, where it has more than one candidate) picks; unless settings->ignorePlan,
-// mlt's mutation mix with the parts the scene does not need at zero weight.
+// (and with settings->pilot its pilot, where it has more than one candidate) picks; unless
+// settings->ignorePlan, mlt's mutation mix with the parts the scene does not need at zero weight.
 RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
                    const std::function<bool()>& keepGoing = {});
 

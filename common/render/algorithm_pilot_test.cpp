@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include "common/render/local_render.h"
 #include "common/scene/scene.h"
 
@@ -152,13 +154,40 @@ TEST(PlanJob, ABudgetTooShortForAPilotTakesTheFirstCandidate) {
   std::shared_ptr<Scene> scene = load(kShared + "/scenes/cornell-box/scene.xml", 32);
   RenderSettings settings;
   settings.autoAlgorithm = true;
+  settings.pilot = true;
   settings.width = settings.height = 32;
   settings.timeBudgetSeconds = 1;
   const RenderPlan plan = planJob(scene, &settings);
   EXPECT_TRUE(plan.pilot.empty());
   ASSERT_GT(plan.shortlist.size(), 1u);
   EXPECT_EQ(settings.algorithm, plan.shortlist.front());
-  EXPECT_NE(plan.why.find("no pilot"), std::string::npos) << plan.why;
+  EXPECT_NE(plan.why.find("no pilot: 10% of the budget"), std::string::npos) << plan.why;
+  EXPECT_FALSE(settings.pilot) << "the planned settings have nothing left to pilot";
+}
+
+// Without --pilot, auto renders the plan's first candidate at once, whatever the budget: on the
+// corpus's tuning half the pilot cost more than its picks saved (docs/corpus.md).
+TEST(PlanJob, AutoWithoutThePilotRendersThePlansFirstCandidate) {
+  std::shared_ptr<Scene> scene = load(kShared + "/scenes/cornell-box/scene.xml", 32);
+  RenderSettings settings;
+  settings.autoAlgorithm = true;
+  settings.width = settings.height = 32;
+  settings.timeBudgetSeconds = 30;
+  const auto start = std::chrono::steady_clock::now();
+  const RenderPlan plan = planJob(scene, &settings);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_GT(plan.shortlist.size(), 1u);
+  EXPECT_TRUE(plan.pilot.empty());
+  EXPECT_EQ(settings.algorithm, plan.shortlist.front());
+  EXPECT_FALSE(settings.autoAlgorithm);
+  EXPECT_NE(plan.why.find("no pilot (--pilot runs one)"), std::string::npos) << plan.why;
+  // A pilot would take 3 s (10% of 30 s); the plan's probes alone take a fraction of that.
+  EXPECT_LT(seconds, 2.0);
+
+  RenderSettings bad;
+  bad.pilot = true;
+  EXPECT_NE(bad.validate().find("--pilot"), std::string::npos) << "--pilot without auto";
 }
 
 TEST(PlanJob, ThePilotOverrulesTheFirstCandidateOnlyByAMargin) {

@@ -71,6 +71,8 @@ std::string RenderSettings::validate() const {
     err << "--error-groups must be in 0..64 (0: the default), not " << errorGroups;
   } else if (autoAlgorithm && ignorePlan) {
     err << "--algorithm auto is the plan's choice: it cannot go with --no-plan";
+  } else if (pilot && !autoAlgorithm) {
+    err << "--pilot ranks auto's candidates: it needs --algorithm auto";
   } else if (errorGroups == 1 && untilError > 0) {
     err << "--until-error needs an error estimate, which --error-groups 1 turns off";
   }

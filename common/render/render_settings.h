@@ -16,10 +16,13 @@ bool parseShadingNormals(const std::string& name, ShadingNormals* out);
 
 struct RenderSettings {
   Algorithm algorithm = Algorithm::PSSMLT;
-  // --algorithm auto: the coordinator picks the algorithm by the scene's plan and a short pilot
-  // of its candidates (common/render/algorithm_pilot.h), then renders with it; `algorithm` is
-  // ignored until then, and holds the pick after.
+  // --algorithm auto: the coordinator picks the algorithm by the scene's plan (its first
+  // candidate), then renders with it; `algorithm` is ignored until then, and holds the pick after.
   bool autoAlgorithm = false;
+  // --pilot, with auto: a short pilot of each of the plan's candidates ranks them first
+  // (common/render/algorithm_pilot.h). Off by default: on the corpus's tuning half it cost more
+  // than it saved (docs/corpus.md, "Auto with and without its pilot").
+  bool pilot = false;
   // --no-plan: render with every part the settings name, even those the scene's plan leaves out
   // (mlt's mutations for specular chains on a scene without any): what measures the saving.
   bool ignorePlan = false;
@@ -39,9 +42,9 @@ struct RenderSettings {
   // erptChains chains of erptLength mutations.
   double erptChains = 1;
   int erptLength = 100;
-  // mlt and erpt through density grids: f's transmittances are the mean of mediumSamples ratio-tracking
-  // estimates (pseudo-marginal MLT), or, with mediumMarchSteps > 0, marched with that many steps
-  // per segment (deterministic, biased by the step).
+  // mlt and erpt through density grids: f's transmittances are the mean of mediumSamples
+  // ratio-tracking estimates (pseudo-marginal MLT), or, with mediumMarchSteps > 0, marched with
+  // that many steps per segment (deterministic, biased by the step).
   int mediumSamples = 1;
   int mediumMarchSteps = 0;
   // Mutations (or samples) a chain runs between flushes; 0: one film's worth (the pixel count,
