@@ -52,7 +52,7 @@ const std::atomic<bool>* catchInterrupts() {
 // --- Render options shared by `render` and `submit`
 
 struct RenderOptions {
-  std::string algorithm = "pssmlt";
+  std::string algorithm = "auto";
   int64_t spp = 16, mpp = 16;
   double time = 0;
   int width = 0, height = 0;
@@ -84,8 +84,9 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "MLT with Veach's mutations), erpt (energy redistribution path tracing), "
                    "auto (the scene's plan picks one, its first candidate: `farm plan SCENE` "
                    "shows how and why; with --pilot a short render of each candidate ranks "
-                   "them)")
-      ->default_str("pssmlt");
+                   "them; within 1.2x of the best on the corpus's measuring half, "
+                   "docs/corpus.md)")
+      ->default_str("auto");
   command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt), seeds per pixel (erpt)")
       ->default_str("16");
   command->add_option("--mpp", o->mpp, "mutations per pixel (pssmlt, pssmlt-pt, mmlt, mlt)")

@@ -320,9 +320,10 @@ TEST(FarmRender, BootstrapCandidatesOption) {
   ScratchDir scratch("bootstrap-option");
   ASSERT_FALSE(scratch.path().empty());
   auto render = [&](std::vector<std::string> extra) {
-    std::vector<std::string> argv = {FARM_CLI_BIN, "render",    kScene,     "-o", scratch / "b.exr",
-                                     "--width",    "32",        "--height", "32", "--mpp",
-                                     "4",          "--threads", "2"};
+    std::vector<std::string> argv = {
+        FARM_CLI_BIN, "render",    kScene,     "-o",          scratch / "b.exr",
+        "--width",    "32",        "--height", "32",          "--mpp",
+        "4",          "--threads", "2",        "--algorithm", "pssmlt"};
     argv.insert(argv.end(), extra.begin(), extra.end());
     return runCommand(argv, seconds(120), scratch.path());
   };
@@ -338,6 +339,21 @@ TEST(FarmRender, BootstrapCandidatesOption) {
     EXPECT_NE(refused.err.find("--bootstrap-candidates must be in 0..67108864"), std::string::npos)
         << bad << ": " << refused.err;
   }
+}
+
+// `farm render` and `farm submit` render with auto unless told otherwise: the plan's first
+// candidate, pt on the Cornell box (the corpus's measuring half, docs/corpus.md, is what made it
+// the default).
+TEST(FarmRender, AutoIsTheDefaultAlgorithm) {
+  ScratchDir scratch("default-algorithm");
+  ASSERT_FALSE(scratch.path().empty());
+  CommandResult r = runCommand({FARM_CLI_BIN, "render", kScene, "-o", scratch / "d.exr", "--width",
+                                "16", "--height", "16", "--spp", "2", "--threads", "2"},
+                               seconds(120), scratch.path());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("algorithm: pt (auto)"), std::string::npos) << r.out;
+  CommandResult help = runCommand({FARM_CLI_BIN, "submit", "--help"}, seconds(30), scratch.path());
+  EXPECT_NE(help.out.find("--algorithm TEXT=auto"), std::string::npos) << help.out;
 }
 
 // `farm render --max-depth`: the longest path in edges overrides the scene file's (65 on the
