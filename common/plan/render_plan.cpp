@@ -66,11 +66,10 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
   // without specular surfaces (within 1.2x of bdpt on every such tuning scene; bdpt first under
   // small lights, as before, left 1.6x under a tiny one; veach-mis, whose glossy plates favour
   // bdpt, pays 1.14-1.27x); with them, pt first in a room, bdpt first under an environment or
-  // in fog (below). Where the lights are
-  // hidden from most of it (SceneAnalysis::directlyLit), next-event estimation mostly meets
-  // the occluder: bdpt first without specular surfaces (the boxed-in light: pt 11x bdpt's
-  // error) and mlt first with them (veach-ajar's door: mlt led at 10, 30 and 100 s, 0.011 at
-  // 100 s against bdpt's 0.023).
+  // in fog (below). Where the lights are hidden from most of it (SceneAnalysis::directlyLit),
+  // next-event estimation mostly meets the occluder: bdpt first without specular surfaces (the
+  // boxed-in light: pt 11x bdpt's error) and mlt first with them (veach-ajar's door: mlt led at
+  // 10, 30 and 100 s, 0.011 at 100 s against bdpt's 0.023).
   const bool hidden = s.directlyLit < kFewDirectlyLit;
   std::vector<Algorithm> wanted;
   std::string why;
@@ -110,25 +109,25 @@ void shortlist(const SceneAnalysis& s, RenderPlan* plan) {
     // start from (pt 2.5-3.1x bdpt's error), and in fog before the camera bdpt's light subpaths
     // scatter in the medium and connect (fog-0: pt 1.22x bdpt's). docs/corpus.md, "pt or bdpt
     // first with specular surfaces".
-    const bool ptFirst = !hidden && !s.environment && !foggy(s);
-    wanted =
-        hidden ? std::vector<Algorithm>{Algorithm::MLT, Algorithm::Bidirectional, Algorithm::PSSMLT}
-        : ptFirst ? std::vector<Algorithm>{Algorithm::PathTracing, Algorithm::Bidirectional,
-                                           Algorithm::PSSMLT}
-                  : std::vector<Algorithm>{Algorithm::Bidirectional, Algorithm::PathTracing,
-                                           Algorithm::PSSMLT};
-    why =
-        (foggy(s) && s.someSpecularDiffuseSpecular()
-             ? "specular surfaces seen through fog (" + percent(s.specularSeen) + " seen, " +
-                   percent(s.specularLit) + " lit first; the fog takes " + percent(s.mediaSeen) +
-                   " of the light along camera rays), "
-             : "specular surfaces, but no specular-diffuse-specular light (" +
-                   percent(s.specularSeen) + " seen, " + percent(s.specularLit) + " lit first), ") +
-        lit +
-        (hidden     ? ": mlt first"
-         : ptFirst  ? ": pt first"
-         : foggy(s) ? ": bdpt first (its light subpaths scatter in the fog)"
-                    : ": bdpt first (its light subpaths start from the environment's sun)");
+    const bool fog = foggy(s);
+    why = fog && s.someSpecularDiffuseSpecular()
+              ? "specular surfaces seen through fog (" + percent(s.specularSeen) + " seen, " +
+                    percent(s.specularLit) + " lit first; the fog takes " + percent(s.mediaSeen) +
+                    " of the light along camera rays), "
+              : "specular surfaces, but no specular-diffuse-specular light (" +
+                    percent(s.specularSeen) + " seen, " + percent(s.specularLit) + " lit first), ";
+    why += lit;
+    if (hidden) {
+      wanted = {Algorithm::MLT, Algorithm::Bidirectional, Algorithm::PSSMLT};
+      why += ": mlt first";
+    } else if (!s.environment && !fog) {
+      wanted = {Algorithm::PathTracing, Algorithm::Bidirectional, Algorithm::PSSMLT};
+      why += ": pt first";
+    } else {
+      wanted = {Algorithm::Bidirectional, Algorithm::PathTracing, Algorithm::PSSMLT};
+      why += fog ? ": bdpt first (its light subpaths scatter in the fog)"
+                 : ": bdpt first (its light subpaths start from the environment's sun)";
+    }
   }
   for (Algorithm a : wanted) {
     if (usable(s, a)) plan->shortlist.push_back(a);

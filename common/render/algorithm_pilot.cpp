@@ -177,14 +177,16 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
   if (settings->autoAlgorithm) {
     if (plan.shortlist.empty())
       throw std::runtime_error("no algorithm of this build can render this scene");
-    const double seconds = pilotSecondsEach(*settings, plan.shortlist.size());
-    if (plan.shortlist.size() > 1 && !settings->pilot) {
+    if (plan.shortlist.size() == 1) {
+      // One candidate: nothing to rank.
+    } else if (!settings->pilot) {
       plan.why += "; no pilot (--pilot runs one), so the first renders";
-    } else if (plan.shortlist.size() > 1 && seconds <= 0) {
+    } else if (const double seconds = pilotSecondsEach(*settings, plan.shortlist.size());
+               seconds <= 0) {
       plan.why += "; no pilot: " + std::to_string(int(100 * kPilotShare)) + "% of the budget " +
                   "gives each candidate under " + std::to_string(kPilotMinSeconds).substr(0, 4) +
                   " s, so the first renders";
-    } else if (plan.shortlist.size() > 1) {
+    } else {
       RenderSettings pilot = *settings;
       pilot.mutationMix = plan.mutationMix;
       plan.pilot = runPilot(scene, pilot, plan.shortlist, seconds, keepGoing);
