@@ -19,11 +19,12 @@ combination as a ratio to it (under 1: the combination wins at equal time).
 """
 import argparse
 import itertools
-import json
 import os
 
 import numpy as np
 import OpenImageIO as oiio
+
+from corpus_common import add_corpus_arguments, corpus_scenes, reference_floor, reference_path
 
 
 def read_rgb(path):
@@ -50,35 +51,25 @@ def box(v, radius=2):
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("corpus")
-    parser.add_argument("out")
-    parser.add_argument("--half", default="measure", choices=["measure", "tune", "all"])
+    add_corpus_arguments(parser, half="measure", seeds=[1, 2, 3], farm=False)
     parser.add_argument("--algorithms", default="pt,bdpt,pssmlt,mmlt")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
-    parser.add_argument("--only", default="")
     args = parser.parse_args()
     if len(args.seeds) < 3:
         parser.error("need three seeds or more: two give the weights of the third")
     algorithms = args.algorithms.split(",")
-    with open(os.path.join(args.corpus, "corpus.json")) as f:
-        scenes = [s for s in json.load(f)["scenes"] if args.half in ("all", s["half"])]
-    only = set(filter(None, args.only.split(",")))
+    scenes = corpus_scenes(args)
     pairs = list(itertools.combinations(algorithms, 2))
     print("| scene | half | best | its relMSE | " + " | ".join("+".join(p) for p in pairs) + " |")
     print("|---|---|---|---|" + "---|" * len(pairs))
     wins = {p: 0 for p in pairs}
     ratios = {p: [] for p in pairs}
     for s in scenes:
-        if only and s["name"] not in only:
-            continue
-        d = os.path.dirname(os.path.join(args.corpus, s["scene"]))
         paths = {(a, k): os.path.join(args.out, s["name"], "seed-%d" % k, a, "image.exr")
                  for a in algorithms for k in args.seeds}
         if not all(os.path.exists(p) for p in paths.values()):
             continue
-        reference = read_rgb(os.path.join(d, "reference.exr"))
-        with open(os.path.join(d, "reference.json")) as f:
-            floor = json.load(f)["reference_relmse"]
+        reference = read_rgb(reference_path(args, s))
+        floor = reference_floor(args, s)
         image = {key: read_rgb(p) for key, p in paths.items()}
         single = {a: np.mean([relmse(image[a, k], reference) - floor for k in args.seeds])
                   for a in algorithms}

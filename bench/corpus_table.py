@@ -29,6 +29,9 @@ import os
 import subprocess
 import sys
 
+from corpus_common import (add_corpus_arguments, corpus_scenes, reference_floor, reference_path,
+                           scene_path)
+
 
 def series(path):
     with open(path) as f:
@@ -50,30 +53,19 @@ def run(command, log):
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("corpus")
-    parser.add_argument("out")
-    parser.add_argument("--half", default="measure", choices=["measure", "tune", "all"])
+    add_corpus_arguments(parser, half="measure", seeds=[1, 2, 3])
     parser.add_argument("--times", type=float, nargs="+", default=[10, 30])
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     parser.add_argument("--algorithms", default="pt,bdpt,pssmlt,mmlt,mlt")
-    parser.add_argument("--size", type=int, default=64)
-    parser.add_argument("--farm", default="build/bin/farm")
-    parser.add_argument("--only", default="", help="comma-separated scene names")
-    parser.add_argument("--table-only", action="store_true", help="render nothing, tabulate OUT")
     parser.add_argument("--auto-only", action="store_true",
                         help="render auto again, keep the algorithms' series")
     parser.add_argument("--no-auto", action="store_true", help="render the algorithms only")
     args = parser.parse_args()
     algorithms = args.algorithms.split(",")
     times = sorted(args.times)
-    with open(os.path.join(args.corpus, "corpus.json")) as f:
-        scenes = [s for s in json.load(f)["scenes"] if args.half in ("all", s["half"])]
-    only = set(filter(None, args.only.split(",")))
-    scenes = [s for s in scenes if not only or s["name"] in only]
+    scenes = corpus_scenes(args)
     size = ["--width", str(args.size), "--height", str(args.size)]
     for s in scenes:
-        scene = os.path.join(args.corpus, s["scene"])
-        reference = os.path.join(os.path.dirname(scene), "reference.exr")
+        scene, reference = scene_path(args, s), reference_path(args, s)
         if not os.path.exists(reference):
             sys.exit("no reference for %s: run tools/corpus_references.py first" % s["name"])
         for seed in args.seeds if not args.table_only else []:
@@ -107,8 +99,7 @@ def median(xs):
 def tabulate(args, scenes, algorithms, times):
     rows = []
     for s in scenes:
-        with open(os.path.join(args.corpus, os.path.dirname(s["scene"]), "reference.json")) as f:
-            floor = json.load(f)["reference_relmse"]
+        floor = reference_floor(args, s)
         # The machine's speed scatters between renders of one sitting (docs/corpus.md): each
         # algorithm's median samples a second over this scene's renders of it, to which the
         # speed-corrected errors rescale each render (relative MSE falls as 1 / samples).

@@ -10,36 +10,30 @@ Writes OUT/<scene>/<algorithm>-seed-<n>/ and OUT/estimates.md.
 
     bench/pilot_estimates.py CORPUS OUT [--half tune|measure|all] [--algorithms pt,bdpt,pssmlt]
                              [--seconds 1] [--seeds 1 2 3] [--size 64] [--farm build/bin/farm]
+                             [--only a,b] [--table-only]
 """
 import argparse
 import json
 import math
 import os
 import subprocess
-import sys
+
+from corpus_common import add_corpus_arguments, corpus_scenes, reference_path, scene_path
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("corpus")
-    parser.add_argument("out")
-    parser.add_argument("--half", default="tune", choices=["measure", "tune", "all"])
+    add_corpus_arguments(parser, half="tune", seeds=[1, 2, 3])
     parser.add_argument("--algorithms", default="pt,bdpt,pssmlt")
     parser.add_argument("--seconds", type=float, default=1)
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
-    parser.add_argument("--size", type=int, default=64)
-    parser.add_argument("--farm", default="build/bin/farm")
-    parser.add_argument("--table-only", action="store_true")
     args = parser.parse_args()
     algorithms = args.algorithms.split(",")
-    with open(os.path.join(args.corpus, "corpus.json")) as f:
-        scenes = [s for s in json.load(f)["scenes"] if args.half in ("all", s["half"])]
+    scenes = corpus_scenes(args)
     lines = ["| scene | " + " | ".join(algorithms) + " |", "|---|" + "---|" * len(algorithms)]
     every = {a: [] for a in algorithms}
     for s in scenes:
-        scene = os.path.join(args.corpus, s["scene"])
-        reference = os.path.join(os.path.dirname(scene), "reference.exr")
+        scene, reference = scene_path(args, s), reference_path(args, s)
         cells = []
         for a in algorithms:
             ratios = []

@@ -8,7 +8,7 @@ the pilot cost more than its picks saved.
 Writes OUT/<scene>/seed-<n>/{pilot,first}/ and OUT/pilot_vs_first.md.
 
     bench/pilot_vs_first.py CORPUS OUT [--half tune|measure|all] [--seconds 30] [--seeds 1 2]
-                            [--size 64] [--farm build/bin/farm] [--table-only]
+                            [--size 64] [--farm build/bin/farm] [--only a,b] [--table-only]
 """
 import argparse
 import json
@@ -16,29 +16,23 @@ import math
 import os
 import subprocess
 
+from corpus_common import (add_corpus_arguments, corpus_scenes, reference_floor, reference_path,
+                           scene_path)
+
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("corpus")
-    parser.add_argument("out")
-    parser.add_argument("--half", default="tune", choices=["measure", "tune", "all"])
+    add_corpus_arguments(parser, half="tune", seeds=[1, 2])
     parser.add_argument("--seconds", type=float, default=30)
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--size", type=int, default=64)
-    parser.add_argument("--farm", default="build/bin/farm")
-    parser.add_argument("--table-only", action="store_true")
     args = parser.parse_args()
-    with open(os.path.join(args.corpus, "corpus.json")) as f:
-        scenes = [s for s in json.load(f)["scenes"] if args.half in ("all", s["half"])]
+    scenes = corpus_scenes(args)
     lines = ["| scene | plan's first | the pilot picked | first alone | auto --pilot | "
              "pilot / first |", "|---|---|---|---|---|---|"]
     ratios = []
     for s in scenes:
-        scene = os.path.join(args.corpus, s["scene"])
-        reference = os.path.join(os.path.dirname(scene), "reference.exr")
-        with open(os.path.join(os.path.dirname(scene), "reference.json")) as f:
-            floor = json.load(f)["reference_relmse"]
+        scene, reference = scene_path(args, s), reference_path(args, s)
+        floor = reference_floor(args, s)
         errors = {"pilot": [], "first": []}
         picks, first = [], None
         for seed in args.seeds:

@@ -1,0 +1,44 @@
+"""What the corpus benches share (bench/corpus_table.py, pilot_estimates.py, pilot_vs_first.py,
+combine_offline.py): their common arguments, the scenes of one half of the corpus that
+tools/make_corpus.py wrote, and where each scene's reference and its own error lie
+(tools/corpus_references.py)."""
+import json
+import os
+
+
+def add_corpus_arguments(parser, half, seeds, farm=True):
+    """CORPUS and OUT, --half, --seeds and --only; with farm, also --size, --farm and
+    --table-only, for the benches that render."""
+    parser.add_argument("corpus")
+    parser.add_argument("out")
+    parser.add_argument("--half", default=half, choices=["measure", "tune", "all"])
+    parser.add_argument("--seeds", type=int, nargs="+", default=seeds)
+    parser.add_argument("--only", default="", help="comma-separated scene names")
+    if farm:
+        parser.add_argument("--size", type=int, default=64)
+        parser.add_argument("--farm", default="build/bin/farm")
+        parser.add_argument("--table-only", action="store_true",
+                            help="render nothing, tabulate OUT")
+
+
+def corpus_scenes(args):
+    """The corpus.json entries of args.half, narrowed to args.only when given."""
+    with open(os.path.join(args.corpus, "corpus.json")) as f:
+        scenes = [s for s in json.load(f)["scenes"] if args.half in ("all", s["half"])]
+    only = set(filter(None, args.only.split(",")))
+    return [s for s in scenes if not only or s["name"] in only]
+
+
+def scene_path(args, s):
+    return os.path.join(args.corpus, s["scene"])
+
+
+def reference_path(args, s):
+    return os.path.join(os.path.dirname(scene_path(args, s)), "reference.exr")
+
+
+def reference_floor(args, s):
+    """The reference's own relative MSE (reference.json): each bench takes it off a render's
+    measured error, which is about the sum of the two, independent as they are."""
+    with open(os.path.join(os.path.dirname(scene_path(args, s)), "reference.json")) as f:
+        return json.load(f)["reference_relmse"]
