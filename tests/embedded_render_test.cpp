@@ -269,8 +269,6 @@ TEST(EmbeddedRender, ShadingNormalsOverrideTheScenes) {
   EXPECT_GT(sumLax, sumStrict);
 }
 
-// --until-error: the job stops once the error estimated from its chain groups is there,
-// long before its budget, and says so; the report's CSV carries the estimate with no reference.
 // --algorithm auto --pilot: the pilot takes about a tenth of the budget, the job renders with its
 // pick, and the report says what the plan chose and why.
 TEST(EmbeddedRender, AutoRendersWithThePilotsPickAndReportsThePlan) {
@@ -308,6 +306,8 @@ TEST(EmbeddedRender, AutoRendersWithThePilotsPickAndReportsThePlan) {
   EXPECT_NE(bad.validate().find("--no-plan"), std::string::npos);
 }
 
+// --until-error: the job stops once the error estimated from its chain groups is there,
+// long before its budget, and says so; the report's CSV carries the estimate with no reference.
 TEST(EmbeddedRender, UntilErrorStopsOnceTheEstimateIsThere) {
   EmbeddedRenderOptions o = options(Algorithm::PSSMLT, 2, 1);
   o.settings.width = o.settings.height = 64;

@@ -154,6 +154,20 @@ constexpr double kIntensity = 10;
 // The medium's box: half a side of 40 leaves e^{-sigma_t 40} <= e^{-20} beyond it.
 constexpr double kBoxHalf = 40;
 
+// The camera both scenes share: at the origin, looking down +z, kSide pixels square; `inside`
+// is more of its XML (the medium it sits in).
+std::string sensor(const std::string& inside = "") {
+  char xml[1024];
+  std::snprintf(xml, sizeof(xml), R"(  <sensor type="perspective"><float name="fov" value="%g"/>
+    <transform name="toWorld"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="%d"/><integer name="height" value="%d"/>
+      <rfilter type="box"/></film>
+%s  </sensor>
+)",
+                kFovDegrees, kSide, kSide, inside.c_str());
+  return xml;
+}
+
 std::string singleScatteringScene() {
   char xml[2048];
   std::snprintf(xml, sizeof(xml), R"(<?xml version="1.0"?>
@@ -163,21 +177,15 @@ std::string singleScatteringScene() {
     <rgb name="sigmaA" value="%g, %g, %g"/><rgb name="sigmaS" value="%g, %g, %g"/>
     <phase type="hg"><float name="g" value="%g"/></phase>
   </medium>
-  <sensor type="perspective"><float name="fov" value="%g"/>
-    <transform name="toWorld"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="%d"/><integer name="height" value="%d"/>
-      <rfilter type="box"/></film>
-    <ref id="fog"/>
-  </sensor>
-  <shape type="cube"><transform name="toWorld"><scale x="%g" y="%g" z="%g"/></transform>
+%s  <shape type="cube"><transform name="toWorld"><scale x="%g" y="%g" z="%g"/></transform>
     <ref name="interior" id="fog"/></shape>
   <emitter type="point"><point name="position" x="%g" y="%g" z="%g"/>
     <rgb name="intensity" value="%g, %g, %g"/></emitter>
 </scene>
 )",
                 kSigmaA[0], kSigmaA[1], kSigmaA[2], kSigmaS[0], kSigmaS[1], kSigmaS[2], kG,
-                kFovDegrees, kSide, kSide, kBoxHalf, kBoxHalf, kBoxHalf, kLight[0], kLight[1],
-                kLight[2], kIntensity, kIntensity, kIntensity);
+                sensor("    <ref id=\"fog\"/>\n").c_str(), kBoxHalf, kBoxHalf, kBoxHalf, kLight[0],
+                kLight[1], kLight[2], kIntensity, kIntensity, kIntensity);
   return xml;
 }
 
@@ -234,12 +242,7 @@ std::string slabScene() {
   <medium type="homogeneous" id="slab">
     <rgb name="sigmaA" value="%g, %g, %g"/><rgb name="sigmaS" value="0, 0, 0"/>
   </medium>
-  <sensor type="perspective"><float name="fov" value="%g"/>
-    <transform name="toWorld"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="%d"/><integer name="height" value="%d"/>
-      <rfilter type="box"/></film>
-  </sensor>
-  <shape type="cube">
+%s  <shape type="cube">
     <transform name="toWorld"><scale x="20" y="20" z="%g"/><translate x="0" y="0" z="%g"/></transform>
     <ref name="interior" id="slab"/></shape>
   <shape type="rectangle">
@@ -247,8 +250,8 @@ std::string slabScene() {
     <emitter type="area"><rgb name="radiance" value="%g, %g, %g"/></emitter></shape>
 </scene>
 )",
-                kSlabAbsorption[0], kSlabAbsorption[1], kSlabAbsorption[2], kFovDegrees, kSide,
-                kSide, 0.5 * (kSlabBack - kSlabFront), 0.5 * (kSlabBack + kSlabFront), kWall,
+                kSlabAbsorption[0], kSlabAbsorption[1], kSlabAbsorption[2], sensor().c_str(),
+                0.5 * (kSlabBack - kSlabFront), 0.5 * (kSlabBack + kSlabFront), kWall,
                 kWallRadiance, kWallRadiance, kWallRadiance);
   return xml;
 }
