@@ -109,6 +109,19 @@ class PythonClientTest(unittest.TestCase):
         self.assertEqual(status.returncode, 0, status.stderr)
         self.assertIn("done", status.stdout)
 
+    def test_auto_is_the_default_and_pilot_needs_it(self):
+        client = FarmClient(self.address, ca=self.at("ca.pem"), token_file=self.at("submit.token"))
+        with self.assertRaises(ValueError):
+            client.submit(SCENE, algorithm="pt", pilot=True)
+        job = client.submit(SCENE, width=32, height=24, spp=4, seed=3)
+        messages = list(client.watch(job, interval=0.2))
+        self.assertEqual(messages[-1].phase, farm_pb2.DONE, messages[-1].error)
+        plan = [line for m in messages for line in m.render_plan]
+        # The Cornell box: no specular surface, the light in sight, so the plan renders pt.
+        self.assertIn("algorithm: pt (auto)", "\n".join(plan))
+        summary = [j for j in client.list() if j.job_id == job]
+        self.assertEqual([j.algorithm for j in summary], [farm_pb2.PT])
+
     def test_the_work_token_does_not_open_the_client_api(self):
         client = FarmClient(self.address, ca=self.at("ca.pem"), token_file=self.at("work.token"))
         with self.assertRaises(FarmError) as caught:

@@ -6,7 +6,7 @@ Debian's grpc_python_plugin); this file adds what a script needs on top: a scene
 uploaded as a bundle, a watch that yields progress, an image fetched whole or not at all.
 
     PYTHONPATH=build/python:clients/python python3 -m farm_client \\
-        --coordinator 127.0.0.1:50051 submit SCENE.xml --algorithm pssmlt --width 256 --height 256
+        --coordinator 127.0.0.1:50051 submit SCENE.xml --width 256 --height 256
     ... watch JOB          ... fetch JOB -o out.exr          ... cancel JOB
 
 or from Python:
@@ -46,6 +46,9 @@ ALGORITHMS = {
     "mlt": farm_pb2.MLT,
     "erpt": farm_pb2.ERPT,
 }
+# What the coordinator's plan picks when the algorithm is "auto" (the default, as `farm submit`'s):
+# the first of its candidates for the scene, or with pilot=True the best of a pilot of each.
+AUTO = "auto"
 TERMINAL = {farm_pb2.DONE, farm_pb2.FAILED, farm_pb2.CANCELLED}
 
 
@@ -139,16 +142,24 @@ class FarmClient:
         except grpc.RpcError as e:
             raise FarmError(e.code(), e.details()) from None
 
-    def submit(self, scene_file, algorithm="pssmlt", width=0, height=0, spp=16, mpp=16,
-               seed=1, time=0.0, chains=0, large_step=0.3, name=None, reference=None):
+    def submit(self, scene_file, algorithm=AUTO, width=0, height=0, spp=16, mpp=16,
+               seed=1, time=0.0, chains=0, large_step=0.3, name=None, reference=None,
+               pilot=False):
         """Uploads what the coordinator lacks of the scene's folder and starts a job; returns
-        its id. Settings the arguments do not name keep the coordinator's defaults."""
-        if algorithm not in ALGORITHMS:
-            raise ValueError(f"unknown algorithm '{algorithm}' (one of {', '.join(ALGORITHMS)})")
+        its id. algorithm "auto" lets the coordinator's plan choose (with pilot=True, a pilot of
+        its candidates). Settings the arguments do not name keep the coordinator's defaults."""
+        automatic = algorithm == AUTO
+        if not automatic and algorithm not in ALGORITHMS:
+            raise ValueError(f"unknown algorithm '{algorithm}' "
+                             f"(one of {AUTO}, {', '.join(ALGORITHMS)})")
+        if pilot and not automatic:
+            raise ValueError("pilot=True needs algorithm 'auto': the pilot ranks the plan's "
+                             "candidates")
         root, entries, local = collect_bundle(scene_file)
         scene_path = os.path.relpath(os.path.abspath(scene_file), root).replace(os.sep, "/")
         settings = farm_pb2.RenderSettings(
-            algorithm=ALGORITHMS[algorithm], width=width, height=height, samples_per_pixel=spp,
+            algorithm=ALGORITHMS.get(algorithm, farm_pb2.PSSMLT), auto_algorithm=automatic,
+            pilot=pilot, width=width, height=height, samples_per_pixel=spp,
             mutations_per_pixel=mpp, seed=seed, time_budget_seconds=time, num_chains=chains,
             large_step_probability=large_step)
         header = farm_pb2.JobHeader(
@@ -231,7 +242,10 @@ def main(argv=None):
     commands = parser.add_subparsers(dest="command", required=True)
     submit = commands.add_parser("submit", help="upload SCENE's folder and start a job")
     submit.add_argument("scene")
-    submit.add_argument("--algorithm", default="pssmlt", choices=sorted(ALGORITHMS))
+    submit.add_argument("--algorithm", default=AUTO, choices=[AUTO] + sorted(ALGORITHMS),
+                        help="auto (the default) lets the coordinator's plan choose")
+    submit.add_argument("--pilot", action="store_true",
+                        help="with auto: a pilot of the plan's candidates picks")
     submit.add_argument("--width", type=int, default=0)
     submit.add_argument("--height", type=int, default=0)
     submit.add_argument("--spp", type=int, default=16)
@@ -256,7 +270,7 @@ def main(argv=None):
         if args.command == "submit":
             print(client.submit(args.scene, algorithm=args.algorithm, width=args.width,
                                 height=args.height, spp=args.spp, mpp=args.mpp, seed=args.seed,
-                                time=args.time, reference=args.reference))
+                                time=args.time, reference=args.reference, pilot=args.pilot))
         elif args.command == "watch":
             last = None
             for p in client.watch(args.job, args.interval):
