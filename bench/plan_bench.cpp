@@ -6,13 +6,18 @@
 //   environment: a constant environment of radiance 1e-6 (escaped rays look it up, and light
 //                selection and BDPT's light subpaths include it)
 //   media:       the camera in a homogeneous medium of extinction 1e-6 (medium tracking, free
-//                flights and transmittance on every segment)
+//                flights and transmittance on every segment); a medium without a boundary
+//                fills all space, so a ray that leaves the room scatters about 1e6 away and the
+//                path goes on there, as the scene asks
+//   bounded:     the same medium inside a box of null boundaries around the room and the
+//                camera: what tracking costs once rays that leave the room leave the medium
 // for path tracing and BDPT; and mlt's mutation mix with the multi-chain and manifold
 // perturbations at zero weight (the plan) against their default weights (--no-plan). One chain,
 // one thread; the ratio of samples (or mutations) per second between a pair is the saving.
 //   build/bin/farm_plan_bench
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <string>
 
 #include "bench/chain_bench.h"
@@ -21,11 +26,37 @@
 #include "common/scene/film_override.h"
 #include "common/scene/loaders/scene_loader.h"
 #include "common/scene/scene.h"
+#include "common/scene/test_scenes.h"
 
 namespace farm {
 namespace {
 
-enum class Part { None, Lens, Textures, Environment, Media };
+enum class Part { None, Lens, Textures, Environment, Media, BoundedMedia };
+
+// Six faces of null boundary around everything in d and its camera, 1% of the diagonal out,
+// their normals outwards (the interior, medium 0, opposite the normal).
+void boundMediumZero(SceneDescription& d) {
+  Vec3f lo(d.camera.toWorld.applyPoint(Vec3f(0.0f))), hi = lo;
+  for (const ShapeDescription& shape : d.shapes) {
+    for (const Vec3f& p : shape.positions) {
+      lo = Vec3f(std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z));
+      hi = Vec3f(std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z));
+    }
+  }
+  const Vec3f pad((hi - lo) * 0.01f);
+  lo = lo - pad;
+  hi = hi + pad;
+  const Vec3f e = hi - lo, x(e.x, 0, 0), y(0, e.y, 0), z(0, 0, e.z);
+  for (ShapeDescription f :
+       {quadShape(lo, y, x, -1), quadShape(Vec3f(lo.x, lo.y, hi.z), x, y, -1),
+        quadShape(lo, x, z, -1), quadShape(Vec3f(lo.x, hi.y, lo.z), z, x, -1),
+        quadShape(lo, z, y, -1), quadShape(Vec3f(hi.x, lo.y, lo.z), y, z, -1)}) {
+    f.hasMediumInterface = true;
+    f.interiorMedium = 0;
+    f.nullBoundary = true;
+    d.shapes.push_back(f);
+  }
+}
 
 std::shared_ptr<Scene> cornell(Part part) {
   SceneDescription d =
@@ -51,11 +82,13 @@ std::shared_ptr<Scene> cornell(Part part) {
       d.environment.present = true;
       d.environment.scale = Spectrum(1e-6f);
       break;
-    case Part::Media: {
+    case Part::Media:
+    case Part::BoundedMedia: {
       MediumDescription m;
       m.sigmaS = Spectrum(1e-6f);
       d.media.push_back(m);
       d.camera.medium = 0;
+      if (part == Part::BoundedMedia) boundMediumZero(d);
       break;
     }
   }
@@ -92,7 +125,9 @@ void BM_MltMix(benchmark::State& state, bool planned) {
       ->Unit(benchmark::kMillisecond);                                                             \
   BENCHMARK_CAPTURE(BM_Part, name##Environment, algorithm, Part::Environment)                      \
       ->Unit(benchmark::kMillisecond);                                                             \
-  BENCHMARK_CAPTURE(BM_Part, name##Media, algorithm, Part::Media)->Unit(benchmark::kMillisecond)
+  BENCHMARK_CAPTURE(BM_Part, name##Media, algorithm, Part::Media)->Unit(benchmark::kMillisecond);  \
+  BENCHMARK_CAPTURE(BM_Part, name##BoundedMedia, algorithm, Part::BoundedMedia)                    \
+      ->Unit(benchmark::kMillisecond)
 
 FARM_PARTS(CornellPt, Algorithm::PathTracing);
 FARM_PARTS(CornellBdpt, Algorithm::Bidirectional);

@@ -19,6 +19,8 @@ Spectrum expSpectrum(const Spectrum& s) {
 
 // Transmittance of a homogeneous segment; an infinite one passes only what does not go out.
 Spectrum homogeneousTransmittance(const Spectrum& sigmaT, float t) {
+  if (sigmaT.x == sigmaT.y && sigmaT.y == sigmaT.z)
+    return Spectrum(sigmaT.x > 0 ? std::exp(-sigmaT.x * t) : 1.0f);
   Spectrum T;
   for (int c = 0; c < 3; ++c) T[c] = sigmaT[c] > 0 ? std::exp(-sigmaT[c] * t) : 1.0f;
   return T;
@@ -121,7 +123,11 @@ MediumInteraction Medium::sampleInteraction(const Vec3f& o, const Vec3f& d, floa
     // of the three (one-sample MIS over channels, the balance heuristic).
     const float uChannel = sampler.next(stream), uDistance = sampler.next(stream);
     const int c = std::min(int(uChannel * 3), 2);
-    const float t = sigmaT_[c] > 0 ? -std::log1p(-uDistance) / sigmaT_[c] : kInfinity;
+    // t = -log(1 - u) / sigma >= u / sigma: with u >= sigma tMax the flight passes the segment,
+    // known without the logarithm (in thin media nearly every flight; in farm_plan_bench the
+    // logarithm alone took 6% of pt's time in a medium of extinction 1e-6).
+    const bool passes = !(sigmaT_[c] > 0) || uDistance >= sigmaT_[c] * tMax;
+    const float t = passes ? kInfinity : -std::log1p(-uDistance) / sigmaT_[c];
     if (t < tMax) {
       const Spectrum T = homogeneousTransmittance(sigmaT_, t);
       const Spectrum density = sigmaT_ * T;
@@ -131,8 +137,11 @@ MediumInteraction Medium::sampleInteraction(const Vec3f& o, const Vec3f& d, floa
       out.weight = pdf > 0 ? desc_.sigmaS * T / pdf : Spectrum(0.0f);
       return out;
     }
+    // The probability of passing the segment is the channels' mean transmittance; in a grey
+    // medium the weight, T over it, is 1.
+    if (sigmaT_.x == sigmaT_.y && sigmaT_.y == sigmaT_.z) return out;
     const Spectrum T = homogeneousTransmittance(sigmaT_, tMax);
-    const float pdf = (T.x + T.y + T.z) / 3;  // the probability of passing the segment
+    const float pdf = (T.x + T.y + T.z) / 3;
     out.weight = pdf > 0 ? T / pdf : Spectrum(0.0f);
     return out;
   }

@@ -220,6 +220,11 @@ class Scene {
   using SegmentVisitor = std::function<bool(const MediumSegment&)>;
   bool walkMedia(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end, const Vec3f* rayEnd, int medium,
                  const SegmentVisitor& visit, int* arrival) const;
+  // intersect(), with the hit's point and normals worked out only for a null boundary unless
+  // everyShape (for another shape, only its shape, primitive and t).
+  bool intersect(const Ray& r, SurfaceHit* hit, bool everyShape) const;
+  // Whether anything lies on the ray from o along d before t = tFar.
+  bool occluded(const Vec3f& o, const Vec3f& d, float tFar) const;
   // transmittance()'s walk.
   Spectrum transmittanceAlong(Vec3f start, Vec3f o, Vec3f d, const Vec3f* end, const Vec3f* rayEnd,
                               int medium, Sampler& sampler, SampleStream stream) const;
@@ -250,6 +255,7 @@ class Scene {
   bool tracksMedia_ = false;
   void* device_ = nullptr;  // RTCDevice
   void* scene_ = nullptr;   // RTCScene
+  bool hasNullBoundaries_ = false;
 };
 
 }  // namespace farm
