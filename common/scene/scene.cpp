@@ -283,6 +283,11 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
     pointLights_.push_back(point);
   }
 
+  reach_ = std::max(extent_, length(camera_.position() - center_));
+  for (const PointLight& p : pointLights_)
+    reach_ = std::max(reach_, length(p.position() - center_));
+  if (!std::isfinite(reach_)) reach_ = kInfinity;
+
   double total = 0;
   for (const AreaLight& l : lights_) {
     total += double(l.power);

@@ -77,6 +77,19 @@ class Scene {
 
   Vec3f center() const { return center_; }  // of the bounding sphere
 
+  // The chance with which a path goes on from a vertex in a medium at p: 1 within twice the
+  // reach of the scene (the bounding sphere widened to the camera and the point lights), and
+  // beyond it the share of that sphere's solid angle seen from p, (2 reach / distance)^2, which
+  // bounds what light from there can still bring back. Only a medium without a boundary (one
+  // the camera or a light sits in, filling all space) puts vertices there: a path leaving the
+  // scene through it scatters about 1 / sigma_t away (10^6 for an extinction of 1e-6) and would
+  // walk on there to its roulette. A survival chance, with the survivor's weight divided by it,
+  // leaves the estimate unbiased whatever its value (Russian roulette).
+  float survivalBeyondReach(const Vec3f& p) const {
+    const float d2 = lengthSquared(p - center_), r2 = 4 * reach_ * reach_;
+    return d2 > r2 ? r2 / d2 : 1.0f;
+  }
+
   // Whether direction w may leave or reach a surface point of geometric normal ng and shading
   // normal ns. With strict normals (Mitsuba's strictNormals, SceneDescription::strictNormals) only
   // where both normals put w on the same side: a path that would cross the surface by the one
@@ -247,6 +260,7 @@ class Scene {
   std::vector<AreaLight> lights_;
   std::vector<double> lightCdf_;
   float extent_ = 1;
+  float reach_ = 1;  // see survivalBeyondReach
   Vec3f center_{0.0f};
   std::unique_ptr<EnvironmentLight> environment_;
   std::vector<PointLight> pointLights_;

@@ -102,9 +102,16 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, int me
       break;
     }
     if (event.scattered) {
+      const Vec3f p = mediumStart + ray.d * event.t;
+      // Far outside the scene in a medium that fills all space (Scene::survivalBeyondReach):
+      // the subpath ends before the vertex, or the vertex and all that follows count 1/q.
+      if (const float q = scene_.survivalBeyondReach(p); roulette && q < 1) {
+        if (sampler.next(stream) >= q) break;
+        beta /= q;
+      }
       v = PathVertex();
       v.kind = PathVertex::Kind::Medium;
-      v.p = mediumStart + ray.d * event.t;
+      v.p = p;
     } else {
       v = surfaceVertex(scene_, hit);
     }

@@ -126,6 +126,12 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       // surface, with the phase function for the BSDF and no cosine.
       if (depth >= maxDepth_) break;
       const Vec3f p = mediumStart + ray.d * event.t;
+      // Far outside the scene in a medium that fills all space: roulette before the vertex's
+      // own next-event estimation (Scene::survivalBeyondReach), with a number of its own.
+      if (const float q = scene_.survivalBeyondReach(p); q < 1) {
+        if (sampler.next(kCameraStream) >= q) break;
+        beta /= q;
+      }
       if (vertices) {
         PathVertex v;
         v.kind = PathVertex::Kind::Medium;
