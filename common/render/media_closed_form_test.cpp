@@ -10,6 +10,9 @@
 //   between the light's direction before (x - q) / r and after (-d) the scattering.
 // - A slab of absorbing medium (thickness D, no scattering) before an emitting wall of
 //   radiance Le, seen directly (maxDepth 1): L(d) = Le e^{-sigma_a D / cos theta}.
+// - A ball of a medium of albedo one around a point light, seen from afar, paths of any length:
+//   all of the light's power leaves the ball, so the irradiance at the pinhole is the light's
+//   intensity over the distance squared (of which the image holds the scattered part).
 //
 // Each pixel of the reference is the closed form averaged over the pixel's square of the film
 // (a box filter) by the midpoint rule. The renders' errors are measured against it from their
@@ -108,9 +111,10 @@ Fit fit(const std::vector<Image>& renders, const std::vector<double>& reference)
   return f;
 }
 
-std::vector<Image> render(const std::string& file, Algorithm algorithm, int spp) {
+std::vector<Image> render(const std::string& file, Algorithm algorithm, int spp,
+                          int renders = kRenders) {
   std::vector<Image> out;
-  for (int k = 0; k < kRenders; ++k) {
+  for (int k = 0; k < renders; ++k) {
     RenderSettings s;
     s.algorithm = algorithm;
     s.samplesPerPixel = spp;
@@ -139,17 +143,17 @@ void expectFits(const char* what, Algorithm algorithm, const std::vector<Image>&
   }
 }
 
-// The camera both scenes share: at the origin, looking down +z, kSide pixels square; `inside`
-// is more of its XML (the medium it sits in).
-std::string sensor(const std::string& inside = "") {
+// The camera the scenes share: at (0, 0, z), looking down +z, kSide pixels square; `inside` is
+// more of its XML (the medium it sits in).
+std::string sensor(const std::string& inside = "", double fovDegrees = kFovDegrees, double z = 0) {
   char xml[1024];
   std::snprintf(xml, sizeof(xml), R"(  <sensor type="perspective"><float name="fov" value="%g"/>
-    <transform name="toWorld"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+    <transform name="toWorld"><lookat origin="0, 0, %g" target="0, 0, %g" up="0, 1, 0"/></transform>
     <film type="hdrfilm"><integer name="width" value="%d"/><integer name="height" value="%d"/>
       <rfilter type="box"/></film>
 %s  </sensor>
 )",
-                kFovDegrees, kSide, kSide, inside.c_str());
+                fovDegrees, z, z + 1, kSide, kSide, inside.c_str());
   return xml;
 }
 
@@ -178,6 +182,27 @@ constexpr PointInFog kBoxedFog = {{0.4, 0.25, 0.1}, {0.1, 0.2, 0.3}, 0.4, {0.0, 
 constexpr PointInFog kBoundlessFog = {
     {0.02, 0.015, 0.01}, {0.01, 0.01, 0.02}, 0.0, {0.0, 0.6, -1.5}, 10, 0};
 
+// A scene of one homogeneous medium "fog" and a point light: `shapes` holds the sensor and
+// the shapes, in Mitsuba's XML.
+std::string fogScene(int maxDepth, const double sigmaA[3], const double sigmaS[3], double g,
+                     const std::string& shapes, const double light[3], double intensity) {
+  char xml[4096];
+  std::snprintf(xml, sizeof(xml), R"(<?xml version="1.0"?>
+<scene version="0.5.0">
+  <integrator type="path"><integer name="maxDepth" value="%d"/></integrator>
+  <medium type="homogeneous" id="fog">
+    <rgb name="sigmaA" value="%g, %g, %g"/><rgb name="sigmaS" value="%g, %g, %g"/>
+    <phase type="hg"><float name="g" value="%g"/></phase>
+  </medium>
+%s  <emitter type="point"><point name="position" x="%g" y="%g" z="%g"/>
+    <rgb name="intensity" value="%g, %g, %g"/></emitter>
+</scene>
+)",
+                maxDepth, sigmaA[0], sigmaA[1], sigmaA[2], sigmaS[0], sigmaS[1], sigmaS[2], g,
+                shapes.c_str(), light[0], light[1], light[2], intensity, intensity, intensity);
+  return xml;
+}
+
 std::string singleScatteringScene(const PointInFog& f) {
   char box[512] = "";
   if (f.boxHalf > 0) {
@@ -188,22 +213,8 @@ std::string singleScatteringScene(const PointInFog& f) {
 )",
         f.boxHalf, f.boxHalf, f.boxHalf);
   }
-  char xml[2048];
-  std::snprintf(xml, sizeof(xml), R"(<?xml version="1.0"?>
-<scene version="0.5.0">
-  <integrator type="path"><integer name="maxDepth" value="2"/></integrator>
-  <medium type="homogeneous" id="fog">
-    <rgb name="sigmaA" value="%g, %g, %g"/><rgb name="sigmaS" value="%g, %g, %g"/>
-    <phase type="hg"><float name="g" value="%g"/></phase>
-  </medium>
-%s%s  <emitter type="point"><point name="position" x="%g" y="%g" z="%g"/>
-    <rgb name="intensity" value="%g, %g, %g"/></emitter>
-</scene>
-)",
-                f.sigmaA[0], f.sigmaA[1], f.sigmaA[2], f.sigmaS[0], f.sigmaS[1], f.sigmaS[2], f.g,
-                sensor("    <ref id=\"fog\"/>\n").c_str(), box, f.light[0], f.light[1], f.light[2],
-                f.intensity, f.intensity, f.intensity);
-  return xml;
+  return fogScene(2, f.sigmaA, f.sigmaS, f.g, sensor("    <ref id=\"fog\"/>\n") + box, f.light,
+                  f.intensity);
 }
 
 double henyeyGreenstein(double g, double cosTheta) {
@@ -311,6 +322,100 @@ TEST(MediaClosedForm, AnAbsorbingSlabBeforeAnEmittingWall) {
              reference);
   expectFits("absorbing slab", Algorithm::Bidirectional, render(file, Algorithm::Bidirectional, 64),
              reference);
+}
+
+// ---- A ball of albedo one around a point light: all of its power leaves ----
+
+// A ball of radius R of a medium that scatters and does not absorb, a point light of intensity
+// I at its centre, in vacuum, seen from distance D. Every photon leaves the ball in the end, and
+// the light field outside is symmetric about the centre, so the net flux through the sphere of
+// radius D is the light's power 4 pi I, spread evenly: the irradiance at the pinhole, facing the
+// centre, is I / D^2. Of it the unscattered part, I e^{-sigma_t R} / D^2, comes from the centre
+// itself, a point no camera ray finds (pt never meets the light, bdpt's light tracing leaves
+// point lights out); the image holds the rest, I (1 - e^{-sigma_t R}) / D^2 in each channel,
+// whatever the phase function and however many times the light scatters. On the film, at
+// distance 1, the irradiance is the sum over pixels of their radiance times their area times
+// cos^4 of the angle off the axis (cos for the pinhole's, cos^3 for the solid angle of an area
+// of the film). With a bubble of vacuum of radius b about the light (null boundaries both), the
+// light goes through vacuum first and e^{-sigma_t (R - b)} of it leaves unscattered; without,
+// the light sits in the medium and its own subpaths start there. Path tracing meets the
+// light only by next-event estimation, whose I / r^2 from a medium vertex at distance r has
+// infinite variance when vertices come arbitrarily close (their density near it falls only as
+// r^2): it renders the ball with the bubble only.
+constexpr double kBallSigmaS[3] = {3.0, 1.5, 0.6};  // 5%, 22%, 55% unscattered
+constexpr double kBallG = 0.6;
+constexpr double kBallRadius = 1, kBallDistance = 8, kBallIntensity = 10;
+constexpr double kBallFovDegrees = 16;  // the ball's edge 7.2 degrees off the axis
+
+// A sphere about the origin that holds the fog inside (interior) or outside (exterior).
+std::string fogSphere(double radius, const char* side) {
+  char xml[512];
+  std::snprintf(
+      xml, sizeof(xml),
+      R"(  <shape type="sphere"><point name="center" x="0" y="0" z="0"/><float name="radius" value="%g"/>
+    <ref name="%s" id="fog"/></shape>
+)",
+      radius, side);
+  return xml;
+}
+
+std::string albedoOneBallScene(double bubble) {
+  std::string shapes =
+      sensor("", kBallFovDegrees, -kBallDistance) + fogSphere(kBallRadius, "interior");
+  if (bubble > 0) shapes += fogSphere(bubble, "exterior");
+  constexpr double kNoAbsorption[3] = {0, 0, 0}, kCentre[3] = {0, 0, 0};
+  return fogScene(-1, kNoAbsorption, kBallSigmaS, kBallG, shapes, kCentre, kBallIntensity);
+}
+
+// Each render's irradiance at the pinhole per channel against the closed form, within 4.5
+// standard errors of the renders' mean (from their spread: 8 renders, 7 degrees of freedom, so
+// that t beyond 4.5 has a chance of 0.3%).
+void expectTheBallsPowerLeaves(Algorithm algorithm, int spp, double bubble) {
+  TempDir dir("media_closed_form_test");
+  const std::string file = dir.write("ball/scene.xml", albedoOneBallScene(bubble));
+  // Each pixel's area times its mean cos^4 (midpoint rule, 8 x 8 points).
+  const double half = std::tan(0.5 * kBallFovDegrees * M_PI / 180), side = 2 * half / kSide;
+  std::vector<double> weight(size_t(kSide) * kSide, 0.0);
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      for (int j = 0; j < 8; ++j) {
+        for (int i = 0; i < 8; ++i) {
+          const double u = -half + (x + (i + 0.5) / 8) * side,
+                       v = -half + (y + (j + 0.5) / 8) * side;
+          const double cos2 = 1 / (1 + u * u + v * v);
+          weight[size_t(y) * kSide + x] += cos2 * cos2 * side * side / 64;
+        }
+      }
+    }
+  }
+  constexpr int kBallRenders = 8;
+  const std::vector<Image> renders = render(file, algorithm, spp, kBallRenders);
+  for (int c = 0; c < 3; ++c) {
+    double sum = 0, sum2 = 0;
+    for (const Image& img : renders) {
+      double e = 0;
+      for (size_t p = 0; p < weight.size(); ++p) e += weight[p] * img.rgb[3 * p + size_t(c)];
+      sum += e, sum2 += e * e;
+    }
+    const double mean = sum / kBallRenders;
+    const double se =
+        std::sqrt(std::max(0.0, sum2 / kBallRenders - mean * mean) / (kBallRenders - 1));
+    const double expected = kBallIntensity *
+                            (1 - std::exp(-kBallSigmaS[c] * (kBallRadius - bubble))) /
+                            (kBallDistance * kBallDistance);
+    std::printf(
+        "albedo-one ball, bubble %g, %s, channel %d: irradiance %.6f, closed form %.6f (se "
+        "%.6f)\n",
+        bubble, algorithmName(algorithm), c, mean, expected, se);
+    EXPECT_NEAR(mean, expected, 4.5 * se)
+        << algorithmName(algorithm) << ", bubble " << bubble << ", channel " << c;
+  }
+}
+
+TEST(MediaClosedForm, AnAlbedoOneBallLetsAllOfItsLightsPowerOut) {
+  expectTheBallsPowerLeaves(Algorithm::Bidirectional, 512, 0);
+  expectTheBallsPowerLeaves(Algorithm::PathTracing, 2048, 0.1);
+  expectTheBallsPowerLeaves(Algorithm::Bidirectional, 512, 0.1);
 }
 
 }  // namespace
