@@ -2,7 +2,7 @@
 // Hands a job's chains to workers under leases. A lease lives for a fixed time unless its holder
 // renews it (an accepted flush or a renewal does); an expired lease puts the chain back in the
 // queue, and whoever leases it next resumes from the last accepted flush's state, so a worker
-// that dies costs at most one flush interval (DESIGN.md, "The work unit").
+// that dies costs at most one flush interval (docs/design.md, "The work unit").
 #include <chrono>
 #include <cstdint>
 #include <map>

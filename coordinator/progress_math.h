@@ -1,5 +1,5 @@
 #pragma once
-// How far along a job is, from the counts DESIGN.md makes exact: work (mutations or samples)
+// How far along a job is, from the counts docs/design.md makes exact: work (mutations or samples)
 // accepted over work planned, or wall-clock time over the budget for time-limited jobs.
 
 namespace farm {

@@ -1,7 +1,7 @@
 #pragma once
 // Sums the chains' splat flushes in double precision, accepting each (chain, flush index)
 // exactly once and in order: a retried upload or a flush from a worker whose lease moved on is a
-// duplicate and changes nothing (DESIGN.md, "The work unit"). Each error group of chains
+// duplicate and changes nothing (docs/design.md, "The work unit"). Each error group of chains
 // (ChainSpec::errorGroup) is summed apart, so that the spread between the groups' images
 // estimates the image's error (common/film/batch_means.h); the image is their sum.
 #include <cstdint>

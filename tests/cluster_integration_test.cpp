@@ -1,6 +1,6 @@
 // A real farm-coordinator and two real farm-worker processes on loopback render the Cornell
 // box; the EXR fetched from the coordinator must agree with `farm render` of the same job and
-// seed, up to float summation order (DESIGN.md: the image depends on scene, settings, seed and
+// seed, up to float summation order (docs/design.md: the image depends on scene, settings, seed and
 // chain budgets only, not on the number of workers).
 #include <gtest/gtest.h>
 #include <signal.h>

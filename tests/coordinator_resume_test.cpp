@@ -1,7 +1,7 @@
 // The coordinator core with the real renderer: a chain whose worker vanishes after one flush is
 // re-leased when the lease expires, resumes from that flush's state, and the job's image equals
-// the image of an uninterrupted run (DESIGN.md: a dead worker costs at most one flush interval,
-// and failures do not change the image).
+// the image of an uninterrupted run (docs/design.md: a dead worker costs at most one flush
+// interval, and failures do not change the image).
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 

@@ -1,5 +1,5 @@
 #pragma once
-// The flush protocol of DESIGN.md in one place: a chain's splats accumulate here between
+// The flush protocol of docs/design.md in one place: a chain's splats accumulate here between
 // flushes, and every spec.flushInterval mutations (and when the budget is spent) they go out as
 // a ChainFlush with the count they cover and the chain's state, so that another worker can
 // resume exactly there.

@@ -1,5 +1,5 @@
 #pragma once
-// The work unit of DESIGN.md: everything a worker needs to run one chain and produce the same
+// The work unit of docs/design.md: everything a worker needs to run one chain and produce the same
 // splats on any host, and what a chain reports back. For pt/bdpt a "chain" is a range of
 // independent samples; for the Markov chain algorithms a chain started from a resampled seed
 // path. Below mcmc/ and transport/ so that every chain kind shares it.

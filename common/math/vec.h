@@ -124,7 +124,7 @@ using Spectrum = Vec3f;
 inline bool isBlack(const Spectrum& s) {
   return s.x == 0 && s.y == 0 && s.z == 0;
 }
-// The scalar contribution of DESIGN.md: luminance with Rec. 709 weights.
+// The scalar contribution (docs/design.md): luminance with Rec. 709 weights.
 inline float luminance(const Spectrum& s) {
   return 0.2126f * s.x + 0.7152f * s.y + 0.0722f * s.z;
 }

@@ -4,7 +4,7 @@
 // strategies for mmlt), with expected-value splatting: each iteration splats the proposal with
 // weight a / I(proposal) and the current state with (1 - a) / I(current), so the film holds
 // sum of f / I and the image is Z / M times it (Veach 1997, eq. 11.7 with the normalization of
-// ../shared/DESIGN.md).
+// the bootstrap, common/mcmc/normalization.h).
 #include <atomic>
 #include <cstdint>
 #include <functional>

@@ -1,5 +1,5 @@
 #pragma once
-// The render a scene implies (DESIGN.md, "Leave out what a scene does not need"): which
+// The render a scene implies (docs/design.md, "Leave out what a scene does not need"): which
 // algorithm, which of path-space MLT's mutations with which weights, and each path-space part
 // either in or left out, with the reason. `farm plan SCENE` prints it; every job carries it in
 // its report. A part left out is gone from the code path: mlt's mutations by a zero weight, which

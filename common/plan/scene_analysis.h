@@ -1,5 +1,5 @@
 #pragma once
-// What a scene has that decides how to render it (DESIGN.md, "Leave out what a scene does not
+// What a scene has that decides how to render it (docs/design.md, "Leave out what a scene does not
 // need"): its surfaces by kind, its lights and their sizes and powers, its camera, textures,
 // environment and media, and probes: where specular surfaces sit on the light's way (the share
 // of camera rays whose first hit is specular, and the share of light rays whose first hit is),

@@ -538,7 +538,7 @@ TEST(Bsdf, FresnelLimits) {
 namespace farm {
 namespace {
 
-// Stiff cases of DESIGN.md: roughness from 1e-4 to 1, indices of refraction near one and very
+// Stiff cases of docs/design.md: roughness from 1e-4 to 1, indices of refraction near one and very
 // high, grazing angles. Every sample must be finite and non-negative, agree with eval/pdf, and
 // the albedo estimated by importance sampling must not exceed one.
 TEST(Bsdf, StiffParametersStayFiniteAndConsistent) {
