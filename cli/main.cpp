@@ -242,12 +242,6 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
       return false;
     }
   }
-  if (!(o.largeStep > 0 && o.largeStep <= 1)) {
-    std::ostringstream value;
-    value << o.largeStep;
-    *error = "--large-step must be a probability in (0, 1], not " + value.str();
-    return false;
-  }
   s->largeStepProbability = o.largeStep;
   s->erptChains = o.erptChains;
   s->erptLength = o.erptLength;

@@ -1,7 +1,6 @@
 #include "coordinator/coordinator.h"
 
 #include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <random>
 
@@ -19,17 +18,6 @@ std::string randomId(const std::string& prefix) {
   std::string id = prefix;
   for (int i = 0; i < 12; ++i, bits >>= 4) id.push_back(kHex[bits & 0xf]);
   return id;
-}
-
-std::string checkJobSettings(const RenderSettings& s) {
-  if (!std::isfinite(s.timeBudgetSeconds) || s.timeBudgetSeconds < 0) {
-    return "time budget must be a finite number of seconds >= 0";
-  }
-  if (!std::isfinite(s.largeStepProbability) || s.largeStepProbability < 0 ||
-      s.largeStepProbability > 1) {
-    return "large step probability must be in [0, 1]";
-  }
-  return s.validate();
 }
 
 Coordinator::Coordinator(CoordinatorOptions options)
@@ -135,7 +123,8 @@ Status unknownJob(const std::string& jobId) {
 }  // namespace
 
 Status Coordinator::submit(JobSpec spec, std::string* jobId) {
-  std::string problem = checkJobSettings(spec.settings);
+  // Every setting is checked in one place, RenderSettings::validate().
+  std::string problem = spec.settings.validate();
   if (!problem.empty()) return Status::invalidArgument("invalid render settings: " + problem);
   std::error_code ec;
   if (!fs::is_regular_file(spec.scenePath, ec)) {

@@ -157,10 +157,6 @@ class Coordinator {
   std::thread housekeeper_;
 };
 
-// Empty when the settings are acceptable for a job, else one line saying what is wrong: the
-// renderer's RenderSettings::validate() plus the checks a hostile request needs first.
-std::string checkJobSettings(const RenderSettings& settings);
-
 // A random identifier: prefix + 12 hex digits.
 std::string randomId(const std::string& prefix);
 

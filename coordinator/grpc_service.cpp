@@ -218,7 +218,7 @@ class ClientService final : public v1::ClientApi::Service {
     if (!farm::fromProto(header.settings(), &settings, &problem)) {
       return invalid("invalid render settings: " + problem);
     }
-    problem = checkJobSettings(settings);
+    problem = settings.validate();
     if (!problem.empty()) return invalid("invalid render settings: " + problem);
 
     const BundleManifest manifest = fromProto(header.manifest());

@@ -310,7 +310,7 @@ TEST_F(HostileRpcTest, NanSettingsAreRejected) {
   settings = smallSettings();
   settings.set_large_step_probability(std::numeric_limits<float>::quiet_NaN());
   EXPECT_STATUS(submit(settings, {{"scene.xml", kSceneXml}}, {}, "scene.xml"), INVALID_ARGUMENT,
-                "large step probability");
+                "large-step probability");
   settings = smallSettings();
   settings.set_algorithm(v1::ALGORITHM_UNSPECIFIED);
   EXPECT_STATUS(submit(settings, {{"scene.xml", kSceneXml}}, {}, "scene.xml"), INVALID_ARGUMENT,
