@@ -21,32 +21,11 @@ namespace {
 constexpr auto kUnaryDeadline = std::chrono::seconds(15);
 constexpr auto kTransferDeadline = std::chrono::minutes(30);
 
-JobPhase fromProto(v1::JobPhase phase) {
-  switch (phase) {
-    case v1::LOADING_SCENE:
-      return JobPhase::kLoadingScene;
-    case v1::BOOTSTRAPPING:
-      return JobPhase::kBootstrapping;
-    case v1::RENDERING:
-      return JobPhase::kRendering;
-    case v1::FINISHING:
-      return JobPhase::kFinishing;
-    case v1::DONE:
-      return JobPhase::kDone;
-    case v1::FAILED:
-      return JobPhase::kFailed;
-    case v1::CANCELLED:
-      return JobPhase::kCancelled;
-    default:
-      return JobPhase::kSubmitted;
-  }
-}
-
 void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->jobId = m.job_id();
   p->name = m.name();
   p->error = m.error();
-  p->phase = fromProto(m.phase());
+  p->phase = farm::fromProto(m.phase());
   p->fraction = m.fraction();
   p->samplesPerSecond = m.samples_per_second();
   p->elapsedSeconds = m.elapsed_seconds();

@@ -63,28 +63,6 @@ grpc::Status invalid(const std::string& message) {
   return {grpc::StatusCode::INVALID_ARGUMENT, message};
 }
 
-v1::JobPhase toProto(JobPhase phase) {
-  switch (phase) {
-    case JobPhase::kSubmitted:
-      return v1::SUBMITTED;
-    case JobPhase::kLoadingScene:
-      return v1::LOADING_SCENE;
-    case JobPhase::kBootstrapping:
-      return v1::BOOTSTRAPPING;
-    case JobPhase::kRendering:
-      return v1::RENDERING;
-    case JobPhase::kFinishing:
-      return v1::FINISHING;
-    case JobPhase::kDone:
-      return v1::DONE;
-    case JobPhase::kFailed:
-      return v1::FAILED;
-    case JobPhase::kCancelled:
-      return v1::CANCELLED;
-  }
-  return v1::PHASE_UNSPECIFIED;
-}
-
 BundleManifest fromProto(const v1::BundleManifest& m) {
   BundleManifest manifest;
   for (const v1::BundleFile& f : m.files()) manifest.push_back({f.path(), f.size(), f.hash()});

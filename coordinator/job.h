@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "common/film/image.h"
+#include "common/render/job_phase.h"
 #include "common/render/render_job.h"
 #include "coordinator/chain_scheduler.h"
 #include "coordinator/splat_aggregator.h"
@@ -24,21 +25,6 @@
 namespace farm {
 
 struct EncodedSplats;  // proto/splat_codec.h
-
-enum class JobPhase {
-  kSubmitted,
-  kLoadingScene,
-  kBootstrapping,
-  kRendering,
-  kFinishing,
-  kDone,
-  kFailed,
-  kCancelled,
-};
-const char* jobPhaseName(JobPhase phase);
-inline bool isTerminal(JobPhase p) {
-  return p == JobPhase::kDone || p == JobPhase::kFailed || p == JobPhase::kCancelled;
-}
 
 // What a job renders and where its inputs are on the coordinator's disk.
 struct JobSpec {

@@ -217,26 +217,46 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   return true;
 }
 
-const char* phaseName(v1::JobPhase phase) {
+v1::JobPhase toProto(JobPhase phase) {
   switch (phase) {
-    case v1::SUBMITTED:
-      return "submitted";
+    case JobPhase::kSubmitted:
+      return v1::SUBMITTED;
+    case JobPhase::kLoadingScene:
+      return v1::LOADING_SCENE;
+    case JobPhase::kBootstrapping:
+      return v1::BOOTSTRAPPING;
+    case JobPhase::kRendering:
+      return v1::RENDERING;
+    case JobPhase::kFinishing:
+      return v1::FINISHING;
+    case JobPhase::kDone:
+      return v1::DONE;
+    case JobPhase::kFailed:
+      return v1::FAILED;
+    case JobPhase::kCancelled:
+      return v1::CANCELLED;
+  }
+  return v1::PHASE_UNSPECIFIED;
+}
+
+JobPhase fromProto(v1::JobPhase phase) {
+  switch (phase) {
     case v1::LOADING_SCENE:
-      return "loading-scene";
+      return JobPhase::kLoadingScene;
     case v1::BOOTSTRAPPING:
-      return "bootstrapping";
+      return JobPhase::kBootstrapping;
     case v1::RENDERING:
-      return "rendering";
+      return JobPhase::kRendering;
     case v1::FINISHING:
-      return "finishing";
+      return JobPhase::kFinishing;
     case v1::DONE:
-      return "done";
+      return JobPhase::kDone;
     case v1::FAILED:
-      return "failed";
+      return JobPhase::kFailed;
     case v1::CANCELLED:
-      return "cancelled";
+      return JobPhase::kCancelled;
     default:
-      return "unknown";
+      return JobPhase::kSubmitted;
   }
 }
 

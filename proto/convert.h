@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/chain/chain_spec.h"
+#include "common/render/job_phase.h"
 #include "common/render/render_settings.h"
 #include "proto/farm.pb.h"
 
@@ -25,7 +26,8 @@ void toProto(const LargeStepSums& sums, v1::LargeStepSums* out);
 LargeStepSums largeStepsFromProto(const v1::LargeStepSums& sums);
 ChainFlush fromProto(const v1::BatchEntry& entry);
 
-// Lowercase names of job phases, as `farm status` and `farm list` print them.
-const char* phaseName(v1::JobPhase phase);
+v1::JobPhase toProto(JobPhase phase);
+// PHASE_UNSPECIFIED and values this build does not know read as submitted.
+JobPhase fromProto(v1::JobPhase phase);
 
 }  // namespace farm
