@@ -83,11 +83,15 @@ std::string planLines(const JobProgress& p) {
 std::string acceptanceLine(const JobProgress& p) {
   if (p.tallies.empty()) return "";
   std::string line = "  acceptance:";
-  for (size_t i = 0; i < p.tallies.size(); ++i) {
-    const MutationTally& t = p.tallies[i];
-    line += (i ? ", " : " ") + t.name + " " +
+  bool first = true;
+  for (const MutationTally& t : p.tallies) {
+    // The causes of lost manifold walks (common/mcmc/mutations/manifold_walk.h) that never
+    // happened say nothing.
+    if (t.accepted == 0 && t.name.rfind("walks lost", 0) == 0) continue;
+    line += (first ? " " : ", ") + t.name + " " +
             format("%.1f", t.proposed > 0 ? 100.0 * t.accepted / t.proposed : 0.0) + "% of " +
             formatCount(double(t.proposed));
+    first = false;
   }
   return line + "\n";
 }

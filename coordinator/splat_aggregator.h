@@ -32,7 +32,9 @@ struct FlushBatch {
   std::vector<uint64_t> epochs;  // one per entry
 };
 
-constexpr size_t kMaxTallyKinds = 16;
+// What a worker may name in its flushes' tallies: mlt names 13 kinds (its mutations, the manifold
+// walks and their causes of loss, manifold_walk.h), the longest 31 characters.
+constexpr size_t kMaxTallyKinds = 24;
 constexpr size_t kMaxTallyName = 32;
 
 class SplatAggregator {

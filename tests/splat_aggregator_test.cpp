@@ -118,7 +118,8 @@ TEST(SplatAggregator, TalliesCountOncePerAcceptedFlush) {
     EXPECT_NE(why.find("tally"), std::string::npos) << why;
   }
   ChainFlush many = makeFlush(0, 1, 1.0f);
-  for (int i = 0; i < 17; ++i) many.tallies.push_back({"kind" + std::to_string(i), 1, 1});
+  for (size_t i = 0; i <= kMaxTallyKinds; ++i)
+    many.tallies.push_back({"kind" + std::to_string(i), 1, 1});
   EXPECT_EQ(sum.add(many, &why), FlushOutcome::kBadValues);
   EXPECT_EQ(sum.workDone(), 200);
   EXPECT_EQ(sum.tallies()[1].proposed, 12);

@@ -17,14 +17,18 @@ ChainFlusher::ChainFlusher(const ChainSpec& spec, const Scene& scene,
       flushIndex_(spec.resumeFlushIndex) {}
 
 void ChainFlusher::tally(const char* kind, bool accepted) {
+  tally(kind, 1, accepted ? 1 : 0);
+}
+
+void ChainFlusher::tally(const char* kind, int64_t proposed, int64_t accepted) {
   for (auto& [name, t] : tallies_) {
     if (name == kind) {
-      ++t.proposed;
+      t.proposed += proposed;
       t.accepted += accepted;
       return;
     }
   }
-  tallies_.push_back({kind, MutationTally{kind, 1, accepted ? 1 : 0}});
+  tallies_.push_back({kind, MutationTally{kind, proposed, accepted}});
 }
 
 bool ChainFlusher::countMutation(uint64_t raysTraced, const std::function<std::string()>& state) {

@@ -38,6 +38,8 @@ class ChainFlusher {
   // Counts a proposal of the given kind (a string with static storage) and whether the chain
   // moved; reported with the next flush.
   void tally(const char* kind, bool accepted);
+  // `proposed` more of `kind`, `accepted` of them.
+  void tally(const char* kind, int64_t proposed, int64_t accepted);
   // Counts a large step whose proposal carried contribution I (accepted or not: its I is an
   // independent sample of the integrand either way); reported with the next flush.
   void largeStep(double I) {

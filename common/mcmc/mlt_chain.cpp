@@ -135,10 +135,14 @@ void PathChain::step(Rng& rng, SplatBuffer& film, float deposit, ChainFlusher* f
     bool proposed = mutation.propose(x_, rng, &y_, &record);
     if (tallyWalks) {
       // The walks it ran (forward, and back to check the move reversible), and which converged.
+      // The lost ones by cause, each as a share of every walk.
       const ManifoldWalkStats& after = manifold_.walkStats();
-      const uint64_t converged = after.converged - walksBefore.converged;
-      for (uint64_t i = 0; i < after.walks - walksBefore.walks; ++i)
-        flusher->tally("manifold walk", i < converged);
+      const int64_t walks = int64_t(after.walks - walksBefore.walks);
+      flusher->tally("manifold walk", walks, int64_t(after.converged - walksBefore.converged));
+      for (int cause = 0; walks > 0 && cause < int(WalkLoss::kCount); ++cause) {
+        flusher->tally(walkLossName(WalkLoss(cause)), walks,
+                       int64_t(after.lost[cause] - walksBefore.lost[cause]));
+      }
     }
     // A perturbation moves surface vertices only: one that would turn a vertex in a medium
     // into a surface's (or back) cannot be reversed, and is rejected.

@@ -28,6 +28,26 @@ bool project(const MutationContext& context, const Path& x, int a, int b, const 
 
 }  // namespace
 
+const char* walkLossName(WalkLoss loss) {
+  switch (loss) {
+    case WalkLoss::kNotAChain:
+      return "walks lost: not a chain";
+    case WalkLoss::kStepCap:
+      return "walks lost: step cap";
+    case WalkLoss::kSingularDerivative:
+      return "walks lost: singular derivative";
+    case WalkLoss::kProjectionCap:
+      return "walks lost: projection cap";
+    case WalkLoss::kStepVanished:
+      return "walks lost: step vanished";
+    case WalkLoss::kEndBlocked:
+      return "walks lost: end blocked";
+    case WalkLoss::kCount:
+      break;
+  }
+  return "walks lost";
+}
+
 bool sameSpecularChain(const Path& a, const Path& b, int first, int last, double walkTolerance) {
   for (int i = first + 1; i < last; ++i) {
     const double edge =
@@ -47,7 +67,12 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
                   std::vector<double>* residuals) {
   const Scene& scene = context.scene;
   if (stats) ++stats->walks;
-  if (!isSpecularChain(scene, x, a, b) || target.kind != PathVertex::Kind::Surface) return false;
+  auto lose = [stats](WalkLoss why) {
+    if (stats) ++stats->lost[int(why)];
+    return false;
+  };
+  if (!isSpecularChain(scene, x, a, b) || target.kind != PathVertex::Kind::Surface)
+    return lose(WalkLoss::kNotAChain);
   const double tolerance = manifoldWalkTolerance(scene, target.p);
   Path current = x;
   double beta = 1;
@@ -57,19 +82,20 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
     const double distance = double(length(r));
     if (residuals) residuals->push_back(distance);
     if (distance < tolerance) break;
-    if (step == kMaxSteps) return false;
+    if (step == kMaxSteps) return lose(WalkLoss::kStepCap);
     if (stats) ++stats->iterations;
     // Newton: the end should move by r (in its tangent plane); x_{a+1} by the derivative times it,
     // both in the tangent bases of their geometric normals (Scene::surfaceDifferential's).
     Matrix2 d;
-    if (!specularChainDerivative(scene, current, a, b, true, &d)) return false;
+    if (!specularChainDerivative(scene, current, a, b, true, &d))
+      return lose(WalkLoss::kSingularDerivative);
     const Frame end(current[b].n), first(current[a + 1].n);
     const double du = dot(r, end.s), dv = dot(r, end.t);
     const double su = d.m[0][0] * du + d.m[0][1] * dv, sv = d.m[1][0] * du + d.m[1][1] * dv;
     bool moved = false;
     while (!moved) {
       const Vec3f q = current[a + 1].p + first.s * float(beta * su) + first.t * float(beta * sv);
-      if (++projections > kMaxProjections) return false;
+      if (++projections > kMaxProjections) return lose(WalkLoss::kProjectionCap);
       Path trial = current;
       // Aimed from where the ray leaves x_a (a little off its surface), so that it meets x_{a+1}'s
       // surface at q itself: aimed from x_a, it would land a little beside q, the same little
@@ -83,13 +109,13 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
       } else {
         if (stats) ++stats->halvings;
         beta *= 0.5;
-        if (beta < kSmallestStep) return false;
+        if (beta < kSmallestStep) return lose(WalkLoss::kStepVanished);
       }
     }
   }
   // The chain ends at the target itself, which it reaches unoccluded.
   current[b] = target;
-  if (!connectVertices(context, current[b - 1], current[b])) return false;
+  if (!connectVertices(context, current[b - 1], current[b])) return lose(WalkLoss::kEndBlocked);
   if (stats) ++stats->converged;
   *y = std::move(current);
   return true;

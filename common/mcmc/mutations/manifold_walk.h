@@ -13,12 +13,28 @@
 
 namespace farm {
 
+// Why a walk was lost, by where it stopped (issue 43: near index 1 a curved surface's constraint
+// nearly degenerates, and a high index turns projections back by total internal reflection,
+// which shows as steps halved away or projections spent).
+enum class WalkLoss {
+  kNotAChain,           // x_a .. x_b is not a specular chain, or the target is not on a surface
+  kStepCap,             // still off the target after kMaxSteps Newton steps
+  kSingularDerivative,  // the chain's derivative could not be inverted
+  kProjectionCap,       // the projections (a ray per chain vertex each) ran out
+  kStepVanished,        // every projection missed, met another shape or came no closer
+  kEndBlocked,          // the chain reached the target, which its last vertex does not see
+  kCount
+};
+// The report's name of each, "walks lost: step cap" and so on.
+const char* walkLossName(WalkLoss loss);
+
 // What the walks did: counted, so that failures show in the report rather than vanish.
 struct ManifoldWalkStats {
   uint64_t walks = 0;
   uint64_t converged = 0;
-  uint64_t iterations = 0;  // Newton steps over all walks
-  uint64_t halvings = 0;    // projections refused and retried with half the step
+  uint64_t iterations = 0;                    // Newton steps over all walks
+  uint64_t halvings = 0;                      // projections refused and retried with half the step
+  uint64_t lost[int(WalkLoss::kCount)] = {};  // walks - converged, by cause
 };
 
 // y: x with x_{a+1} .. x_{b-1} moved and x_b replaced by `target` (a surface vertex), the chain

@@ -392,6 +392,16 @@ TEST(ManifoldWalk, CountsTheWalksThatFail) {
   EXPECT_EQ(stats.walks, 1u);
   EXPECT_EQ(stats.converged, 0u);
   EXPECT_GT(stats.halvings, 0u);
+  // Lost, and counted once, by its cause: every projection towards it missed the ball or came
+  // no closer until the step vanished.
+  for (int cause = 0; cause < int(WalkLoss::kCount); ++cause) {
+    EXPECT_EQ(stats.lost[cause], cause == int(WalkLoss::kStepVanished) ? 1u : 0u)
+        << walkLossName(WalkLoss(cause));
+  }
+  // A chain that is not specular from x_0 to x_1 (its first inner vertex is the end itself).
+  EXPECT_FALSE(manifoldWalk(context, x, 0, 1, target, &y, &stats));
+  EXPECT_EQ(stats.walks, 2u);
+  EXPECT_EQ(stats.lost[int(WalkLoss::kNotAChain)], 1u);
 }
 
 // The same solution, found again by a walk held to its tolerance at the chain's end, lies a few
