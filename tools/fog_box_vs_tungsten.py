@@ -66,7 +66,7 @@ UNIT_TO_CUBE = scale(2, 2, 2)
 
 
 def rectangles():
-    """(name, matrix, reflectance) of the room's faces, normals inwards, and the light's."""
+    """(name, matrix, reflectance) of the room's faces, normals inwards."""
     return [
         ("floor", translate(0, 0, 0) @ rotate("x", -90), WHITE),
         ("ceiling", translate(0, 2, 0) @ rotate("x", 90), WHITE),
@@ -192,9 +192,8 @@ def regions(size):
                 out[j, i] = "ball"
                 continue
             hits = []
-            for name, plane, axis, value in (("floor", 1, 1, 0.0), ("ceiling", 1, 1, 2.0),
-                                             ("back wall", 2, 2, 1.0), ("side walls", 0, 0, -1.0),
-                                             ("side walls", 0, 0, 1.0)):
+            for name, axis, value in (("floor", 1, 0.0), ("ceiling", 1, 2.0), ("back wall", 2, 1.0),
+                                      ("side walls", 0, -1.0), ("side walls", 0, 1.0)):
                 if abs(d[axis]) < 1e-9:
                     continue
                 s = (value - pos[axis]) / d[axis]

@@ -17,10 +17,13 @@ Spectrum expSpectrum(const Spectrum& s) {
   return {std::exp(s.x), std::exp(s.y), std::exp(s.z)};
 }
 
+bool grey(const Spectrum& s) {
+  return s.x == s.y && s.y == s.z;
+}
+
 // Transmittance of a homogeneous segment; an infinite one passes only what does not go out.
 Spectrum homogeneousTransmittance(const Spectrum& sigmaT, float t) {
-  if (sigmaT.x == sigmaT.y && sigmaT.y == sigmaT.z)
-    return Spectrum(sigmaT.x > 0 ? std::exp(-sigmaT.x * t) : 1.0f);
+  if (grey(sigmaT)) return Spectrum(sigmaT.x > 0 ? std::exp(-sigmaT.x * t) : 1.0f);
   Spectrum T;
   for (int c = 0; c < 3; ++c) T[c] = sigmaT[c] > 0 ? std::exp(-sigmaT[c] * t) : 1.0f;
   return T;
@@ -139,7 +142,7 @@ MediumInteraction Medium::sampleInteraction(const Vec3f& o, const Vec3f& d, floa
     }
     // The probability of passing the segment is the channels' mean transmittance; in a grey
     // medium the weight, T over it, is 1.
-    if (sigmaT_.x == sigmaT_.y && sigmaT_.y == sigmaT_.z) return out;
+    if (grey(sigmaT_)) return out;
     const Spectrum T = homogeneousTransmittance(sigmaT_, tMax);
     const float pdf = (T.x + T.y + T.z) / 3;
     out.weight = pdf > 0 ? T / pdf : Spectrum(0.0f);

@@ -103,12 +103,9 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, int me
     }
     if (event.scattered) {
       const Vec3f p = mediumStart + ray.d * event.t;
-      // Far outside the scene in a medium that fills all space (Scene::survivalBeyondReach):
-      // the subpath ends before the vertex, or the vertex and all that follows count 1/q.
-      if (const float q = scene_.survivalBeyondReach(p); roulette && q < 1) {
-        if (sampler.next(stream) >= q) break;
-        beta /= q;
-      }
+      // Far outside the scene in a medium that fills all space: the subpath ends before the
+      // vertex, or the vertex and all that follows count 1/q.
+      if (roulette && !survivesBeyondReach(scene_, p, sampler, stream, &beta)) break;
       v = PathVertex();
       v.kind = PathVertex::Kind::Medium;
       v.p = p;

@@ -127,11 +127,8 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
       if (depth >= maxDepth_) break;
       const Vec3f p = mediumStart + ray.d * event.t;
       // Far outside the scene in a medium that fills all space: roulette before the vertex's
-      // own next-event estimation (Scene::survivalBeyondReach), with a number of its own.
-      if (const float q = scene_.survivalBeyondReach(p); q < 1) {
-        if (sampler.next(kCameraStream) >= q) break;
-        beta /= q;
-      }
+      // own next-event estimation, with a number of its own.
+      if (!survivesBeyondReach(scene_, p, sampler, kCameraStream, &beta)) break;
       if (vertices) {
         PathVertex v;
         v.kind = PathVertex::Kind::Medium;

@@ -72,6 +72,18 @@ inline float russianRouletteSurvival(float throughputScale) {
   return std::min(0.95f, std::max(throughputScale, 0.05f));
 }
 constexpr int kRussianRouletteDepth = 5;  // vertices before roulette starts
+
+// The roulette of Scene::survivalBeyondReach at a medium vertex at p: false when the path ends
+// there; otherwise *beta is divided by the chance it survived with. Within the reach the chance
+// is 1 and no number is drawn.
+inline bool survivesBeyondReach(const Scene& scene, const Vec3f& p, Sampler& sampler,
+                                SampleStream stream, Spectrum* beta) {
+  const float q = scene.survivalBeyondReach(p);
+  if (q >= 1) return true;
+  if (sampler.next(stream) >= q) return false;
+  *beta /= q;
+  return true;
+}
 constexpr int kUnboundedDepth = 1 << 12;  // a safety cap on path length when maxDepth is -1
 
 }  // namespace farm
