@@ -6,6 +6,7 @@
 
 #include "common/mcmc/mutations/manifold_walk.h"
 #include "common/mcmc/primary_sample_integrand.h"
+#include "common/scene/bsdfs/fresnel.h"
 #include "common/scene/scene.h"
 #include "common/transport/specular_manifold.h"
 

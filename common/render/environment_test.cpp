@@ -15,7 +15,7 @@
 #include "common/plan/scene_analysis.h"
 #include "common/render/image_agreement.h"
 #include "common/render/local_render.h"
-#include "common/scene/bsdf.h"
+#include "common/scene/bsdfs/coating_transmittance.h"
 #include "common/scene/loaders/scene_files.h"
 #include "common/scene/scene.h"
 #include "common/scene/test_scenes.h"

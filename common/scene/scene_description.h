@@ -35,7 +35,7 @@ struct CameraDescription {
 };
 
 enum class MicrofacetDistribution { Beckmann, GGX };
-class CoatingTransmittance;  // bsdf.h
+class CoatingTransmittance;  // bsdfs/coating_transmittance.h
 
 struct BsdfDescription {
   // Mitsuba 0.6's diffuse, dielectric (smooth), conductor (smooth), roughconductor and
@@ -70,9 +70,9 @@ struct BsdfDescription {
   float extEta = 1.0f;          // index of the exterior medium
   Spectrum specularReflectance{1.0f};
   // CoatedDiffuse: the coat's transmittance for (distribution, alpha, intIOR / extIOR), made by
-  // makeCoatingTransmittance (bsdf.h); and Mitsuba's "nonlinear" (the base's inter-reflections
-  // under the coat darken and saturate its colour: rho / (1 - rho Fdr) instead of rho /
-  // (1 - Fdr)).
+  // sharedCoatingTransmittance (bsdfs/coating_transmittance.h); and Mitsuba's "nonlinear" (the
+  // base's inter-reflections under the coat darken and saturate its colour: rho / (1 - rho Fdr)
+  // instead of rho / (1 - Fdr)).
   std::shared_ptr<const CoatingTransmittance> coating;
   bool nonlinear = false;
 };

@@ -784,9 +784,10 @@ class MitsubaLoader {
     props.take("sampleVisible");  // a sampling choice, not a look
   }
 
-  // Mitsuba's plastic and roughplastic: a diffuse base under a dielectric coat (bsdf.h's
-  // CoatedDiffuse). The smooth plastic's coat becomes a microfacet coat of alpha 1e-4, which the
-  // stability suite shows renders as the smooth one does except that it reflects point lights.
+  // Mitsuba's plastic and roughplastic: a diffuse base under a dielectric coat
+  // (bsdfs/coated_diffuse.h's CoatedDiffuseBsdf). The smooth plastic's coat becomes a microfacet
+  // coat of alpha 1e-4, which the stability suite shows renders as the smooth one does except that
+  // it reflects point lights.
   void parseCoatedDiffuse(const pugi::xml_node& node, PropertySet& props, const std::string& type,
                           BsdfDescription* b) {
     b->type = BsdfDescription::Type::CoatedDiffuse;

@@ -1077,7 +1077,7 @@ class PbrtLoader {
            "computes it from inside the coating, which reflects totally beyond 42 degrees)");
     } else if (type == "coateddiffuse") {
       // pbrt-v4's coateddiffuse: a dielectric coat over a Lambertian base, which pbrt evaluates
-      // by a random walk between the two; here in closed form (bsdf.h's CoatedDiffuse, with the
+      // by a random walk between the two; here in closed form (bsdfs/coated_diffuse.h, with the
       // base's inter-reflections summed as their series, as the walk does).
       b.type = BsdfDescription::Type::CoatedDiffuse;
       b.twoSided = true;

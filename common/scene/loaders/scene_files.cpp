@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "common/scene/bsdf.h"
+#include "common/scene/bsdfs/coating_transmittance.h"
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/mesh_cleanup.h"
 

@@ -88,7 +88,7 @@ double determinant3(const Matrix4& t);
 enum class Similarity { Uniform, NonUniformScale, Shear };
 Similarity similarityOf(const Matrix4& t, double* scale);
 
-// The last step of both loaders' coated diffuse (bsdf.h's CoatedDiffuse, `what` naming it for
+// The last step of both loaders' coated diffuse (bsdfs/coated_diffuse.h, `what` naming it for
 // messages): reflectances above 1 and equal indices of refraction are SceneLoadErrors at
 // file:line; then the coat's table, shared with identical coats.
 void finishCoatedDiffuse(const std::string& file, int line, const std::string& what,
