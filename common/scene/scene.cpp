@@ -617,6 +617,14 @@ float Scene::lightPickPdf(int light) const {
   return float(double(lights_[light].power) / lightCdf_.back());
 }
 
+double Scene::lightStartDensity(int light, const Vec3f& towardsEnvironment) const {
+  if (light < 0 || light >= int(lights_.size())) return 0;
+  const double pick = double(lightPickPdf(light));
+  if (light == environmentLight_) return pick * double(environment_->pdf(towardsEnvironment));
+  if (lights_[light].isPoint()) return pick;
+  return pick / double(lights_[light].area);
+}
+
 double Scene::lightPickProbability(int light) const {
   if (light < 0 || light >= int(lights_.size())) return 0;
   return (lightCdf_[light] - (light > 0 ? lightCdf_[light - 1] : 0.0)) / lightCdf_.back();

@@ -151,6 +151,14 @@ class Scene {
   // Chooses a light in proportion to power; *pdf is its discrete probability.
   int pickLight(float u, float* pdf) const;
   float lightPickPdf(int light) const;
+  // The density with which a light subpath starts where it does: pickLight's probability of the
+  // light times that of the start on it, the area density 1 / area on an area light, the
+  // coefficient 1 of a point light's delta, and the solid-angle density of the direction
+  // `towardsEnvironment` for the environment. Every estimator's MIS weights take it from here
+  // (pt's weight for a light it hits, BDPT's and the path-space chains' reverse densities, the
+  // chains' seen emission), so that they agree with the sampling they weigh. In double: the
+  // float quotients and products the estimators computed before are this, rounded.
+  double lightStartDensity(int light, const Vec3f& towardsEnvironment = Vec3f(0.0f)) const;
   // The environment, or null; environmentLight() is its index among lights() (or -1).
   const EnvironmentLight* environment() const { return environment_.get(); }
   int environmentLight() const { return environmentLight_; }

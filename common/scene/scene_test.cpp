@@ -53,6 +53,47 @@ TEST(LightSampling, ProbabilitiesAreTheDensitiesOnes) {
   EXPECT_LT(minShare, 1e-8);  // the test covers shares below float's resolution
 }
 
+// The start density every estimator's MIS takes from the scene is the pick's probability times
+// the position's density: 1 / area on an area light, the delta's coefficient 1 on a point light,
+// the direction's density on the environment (a constant one: 1 / 4 pi); so over all lights
+// it integrates to one.
+TEST(LightSampling, StartDensityIsThePickTimesThePositionsDensity) {
+  SceneDescription d = whiteFurnace(0.5f, 5);
+  PointLightDescription point;
+  point.position = Vec3f(0.2f, 0.1f, 0.3f);
+  point.intensity = Spectrum(3.0f);
+  d.pointLights.push_back(point);
+  d.environment.present = true;
+  d.environment.scale = Spectrum(0.25f);
+  Scene scene(d);
+  double total = 0;
+  int kinds[3] = {0, 0, 0};
+  for (int l = 0; l < int(scene.lights().size()); ++l) {
+    const AreaLight& light = scene.lights()[size_t(l)];
+    const double pick = scene.lightPickProbability(l);
+    const Vec3f w = normalize(Vec3f(0.3f, -0.4f, 0.5f));
+    const double density = scene.lightStartDensity(l, w);
+    if (light.isEnvironment()) {
+      ++kinds[0];
+      EXPECT_NEAR(density, pick / (4 * kPi), 1e-6 * density);
+      total += density * 4 * kPi;
+    } else if (light.isPoint()) {
+      ++kinds[1];
+      EXPECT_NEAR(density, pick, 1e-6 * density);
+      total += density;
+    } else {
+      ++kinds[2];
+      EXPECT_NEAR(density * light.area, pick, 1e-6 * pick);
+      total += density * light.area;
+    }
+  }
+  EXPECT_EQ(kinds[0], 1);
+  EXPECT_EQ(kinds[1], 1);
+  EXPECT_GE(kinds[2], 1);
+  EXPECT_NEAR(total, 1.0, 1e-6);
+  EXPECT_EQ(scene.lightStartDensity(-1), 0.0);
+}
+
 // A room (walls facing in) with a ball, seen through a box of clear medium (sigma 0) that
 // only null boundaries bound, or with no box: between any two wall points the transmittance
 // through the box must be the visibility without it. The box's faces cross most segments; a

@@ -259,7 +259,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   y.shape = light.shape;
   y.light = l;
   y.medium = scene_.mediumAt(scene_.spawnRay(p, n, n).o);
-  float pdfPos = pickPdf / light.area;
+  float pdfPos = float(scene_.lightStartDensity(l));
   y.pdfFwd = pdfPos;
   y.beta = light.radiance / pdfPos;
   if (maxVertices < 2) return 1;
@@ -414,13 +414,13 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     if (s == 0 && atInfinity(*z)) {
       // z is the environment: its direction's density as a light-subpath start, and the disk's
       // density projected onto z_{t-2}.
-      pL[0] = scene_.lightPickPdf(z->light) * scene_.environment()->pdf(-z->n);
+      pL[0] = float(scene_.lightStartDensity(z->light, -z->n));
       if (t > 1) {
         pL[1] = scene_.environmentDiskDensity() * cosineAt(cameraPath[t - 2], z->n);
       }
     } else if (s == 0) {
       // z lies on a light: its density as a light-subpath start, and the emission towards z_{t-2}.
-      pL[0] = scene_.lightPickPdf(z->light) / scene_.lights()[z->light].area;
+      pL[0] = float(scene_.lightStartDensity(z->light));
       if (t > 1) {
         const PathVertex& zPrev = cameraPath[t - 2];
         Vec3f w = directionTo(z->p, zPrev.p);

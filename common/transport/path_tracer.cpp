@@ -71,7 +71,7 @@ void PathTracer::nextEvent(const Vec3f& p, const Vec3f& n, const Spectrum& beta,
     const Spectrum Le = scene_.emitted(l, nl, -wiW);
     const float cosL = absDot(nl, wiW);
     if (isBlack(Le) || !(cosL > 0) || !scatter(wiW, &fs, &scatterPdf, &medium)) return;
-    const float pdfLight = pickPdf / scene_.lights()[l].area * d2 / cosL;
+    const float pdfLight = float(scene_.lightStartDensity(l)) * d2 / cosL;
     ++rays_;
     const Spectrum T = scene_.transmittance(p, n, pl, nl, medium, sampler, kCameraStream);
     if (isBlack(T)) return;
@@ -179,7 +179,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
         if (previousDelta) {
           add(beta * Le, nullptr);
         } else {
-          float pdfLight = scene_.lightPickPdf(environment) * scene_.environment()->pdf(ray.d);
+          float pdfLight = float(scene_.lightStartDensity(environment, ray.d));
           add(beta * Le * powerHeuristic(previousPdf, pdfLight), nullptr);
         }
       }
@@ -196,7 +196,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
           // The same path could have come from next-event estimation: weight both (eq. 9.13).
           float d2 = lengthSquared(hit.p - previousP);
           float cosL = absDot(hit.ng, ray.d);
-          float pdfLight = scene_.lightPickPdf(light) / scene_.lights()[light].area * d2 / cosL;
+          float pdfLight = float(scene_.lightStartDensity(light)) * d2 / cosL;
           add(beta * Le * powerHeuristic(previousPdf, pdfLight), nullptr);
         }
       }

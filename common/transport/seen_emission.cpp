@@ -18,7 +18,7 @@ void SeenEmission::densities(int light, const Vec3f& y, const Vec3f& n, double* 
   const Vec3f w = d / float(std::sqrt(d2));
   // The film point's direction density We(w), turned into an area density at y.
   *film = d2 > 0 ? double(camera.importance(camera.position(), w)) * absDot(n, w) / d2 : 0.0;
-  *lightPoint = double(scene_.lightPickPdf(light)) / scene_.lights()[size_t(light)].area;
+  *lightPoint = scene_.lightStartDensity(light);
 }
 
 void SeenEmission::sample(const Vec2f& film, Rng& rng, std::vector<Splat>* splats) const {
