@@ -18,7 +18,7 @@ shared=${FARM_SHARED_DIR:-../shared}
 algorithms=pt,bdpt,pssmlt,pssmlt-pt,mmlt,mlt,erpt
 # scene  scene file  reference  width height  [flags that make the reference's integral]
 # The water-caustic reference keeps paths whose sides its normals dispute (lax) and has at most
-# 8 edges where the file says strict and 9 (README, "Conventions the estimators share"):
+# 8 edges where the file says strict and 9 (docs/conventions.md):
 # against the file's own settings its relative MSE would carry that 3-10% difference of means.
 scenes=(
   "cornell-box $shared/scenes/cornell-box/scene.xml $shared/references/cornell-box-256.exr 256 256"

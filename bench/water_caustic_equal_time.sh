@@ -2,7 +2,7 @@
 # Issue 7's measure: every algorithm on the water caustic at equal wall-clock time, with and
 # without manifold exploration, over several seeds. Shading normals are lax and paths have at
 # most 8 edges, as the reference's renderer had them (README, "What it does" on shading
-# normals and "Conventions the estimators share" on the reference's depth: Tungsten's
+# normals, and docs/conventions.md on the reference's depth: Tungsten's
 # max_bounces 8, where the file says 9). A single run's relative MSE there is decided by
 # a few dozen pixels (a chain that found a bright caustic spike and stayed, a path tracer's
 # firefly), so each algorithm renders once per seed and the table gives, beside each run's

@@ -4,7 +4,7 @@
 // within a factor of two, every algorithm; and on water-caustic, for mlt, the one algorithm that
 // converges there (with manifold walks), rendered as its reference was (lax normals, 8 edges).
 // Every local sampler misses a third of its light: its error against the reference is that
-// deficit, which no group sees (README, "Error without a reference").
+// deficit, which no group sees (README, "Error against run time").
 #include <gtest/gtest.h>
 
 #include <string>
@@ -23,8 +23,8 @@ struct Case {
 // The reference, its size and how it was rendered: ../shared/references' where there is one;
 // veach-ajar's is this renderer's BDPT at 3590 samples a pixel (tests/data/README.md), whose own
 // noise is about 1/3590 of a sample's, far below these renders' of 2-16. The water-caustic
-// reference keeps paths whose sides its normals dispute and has at most 8 edges (README,
-// "Conventions the estimators share"): rendered otherwise, the error measured against it would
+// reference keeps paths whose sides its normals dispute and has at most 8 edges
+// (docs/conventions.md): rendered otherwise, the error measured against it would
 // carry that difference of means, which no group sees.
 struct Target {
   std::string scene, reference;

@@ -229,7 +229,7 @@ void RenderPlan::choose(Algorithm chosen) {
     parts.push_back(p);
   };
   // Not left out without specular surfaces: Veach's caustic perturbation covers (L|D) S* D E,
-  // and with no S it perturbs D D E paths from the light side. Measured (README, "The plan"):
+  // and with no S it perturbs D D E paths from the light side. Measured (docs/plan.md):
   // leaving it out of mlt on cornell-box gave 1.33x the relative MSE at equal time.
   mutation("caustic perturbation", mutationMix.causticPerturbation, nullptr);
   if (mlt && !s.hasSpecular() && mutationMix.causticPerturbation > 0)

@@ -74,7 +74,7 @@ struct RenderPlan {
 // seeds 1-3; relative MSE against the reference): 7.4, 0.79, 1.6 with 64 chains; 0.89, 1.4,
 // 0.87 with 256; 0.38, 0.70, 1.3 with 1024. With mmlt on veach-bidir (30 s, seeds 1-4): 0.0053,
 // 0.47, 0.0062, 0.0055 with 64; 0.0052, 0.46, 0.0065, 0.012 with 256; 0.0052, 0.015, 0.0050,
-// 0.0050 with 1024 (README, "The plan").
+// 0.0050 with 1024 (docs/plan.md).
 constexpr int kSdsChains = 1024;
 
 // Below this share of the surfaces the camera sees that see a light sample

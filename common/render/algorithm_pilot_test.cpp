@@ -125,7 +125,7 @@ TEST(PlanJob, MarkovChainsUnderSpecularDiffuseSpecularLightTakeThePlansChains) {
 }
 
 // On veach-bidir, whose light comes mostly through a lamp's small bulb, path tracing's error
-// is tens of times bidirectional path tracing's (README, "The plan"): a pilot of half a second
+// is tens of times bidirectional path tracing's (docs/plan.md): a pilot of half a second
 // each ranks bdpt first, and says so with its figures.
 TEST(PlanJob, ThePilotRanksByEstimatedErrorTimesTime) {
   std::shared_ptr<Scene> scene = load(kShared + "/scenes/veach-bidir/scene.xml", 48);

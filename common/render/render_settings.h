@@ -48,7 +48,7 @@ struct RenderSettings {
   int mediumSamples = 1;
   int mediumMarchSteps = 0;
   // Mutations (or samples) a chain runs between flushes; 0: one film's worth (the pixel count,
-  // within 4096 .. 2^20). Longer intervals mean fewer, denser uploads (README, "Scale") and
+  // within 4096 .. 2^20). Longer intervals mean fewer, denser uploads (docs/scale.md) and
   // more work lost with a worker that dies.
   int64_t flushInterval = 0;
   // > 0: the job ends once the relative MSE estimated from the spread between its chain groups

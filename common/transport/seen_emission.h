@@ -7,9 +7,9 @@
 // light is in view (the water caustic's: 6 pixels carry 59% of the image's luminance), the
 // chains' share on it is set by how many of them the bootstrap happens to start there, a
 // binomial draw that left the rest of the image 16-32% too dark at 30 s with 64 chains
-// (measured: the README's "Lights in view, apart from mlt's chains"), and the chains spent most
-// of their mutations there. Here those pixels cost two rays a sample, and a light smaller than a
-// pixel, which a film point hits a few times in a million, is found every time by its points.
+// (measured: docs/conventions.md, "Lights in view, apart from mlt's chains"), and the chains spent
+// most of their mutations there. Here those pixels cost two rays a sample, and a light smaller than
+// a pixel, which a film point hits a few times in a million, is found every time by its points.
 //
 // Lights seen through specular surfaces (L S+ E) stay with the chains: there only the film
 // point can find them, and a small light's reflection in a mirror is as rare for it as the
