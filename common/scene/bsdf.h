@@ -6,7 +6,6 @@
 //
 // Adding a model: its class in bsdfs/ (a file pair and its tests), a line in Model below and in
 // makeModel (bsdf.cpp), its type in BsdfDescription and the loaders' entries for it.
-#include <memory>
 #include <variant>
 
 #include "common/math/vec.h"

@@ -72,6 +72,7 @@ inline float russianRouletteSurvival(float throughputScale) {
   return std::min(0.95f, std::max(throughputScale, 0.05f));
 }
 constexpr int kRussianRouletteDepth = 5;  // vertices before roulette starts
+constexpr int kUnboundedDepth = 1 << 12;  // a safety cap on path length when maxDepth is -1
 
 // The roulette of Scene::survivalBeyondReach at a medium vertex at p: false when the path ends
 // there; otherwise *beta is divided by the chance it survived with. Within the reach the chance
@@ -84,6 +85,5 @@ inline bool survivesBeyondReach(const Scene& scene, const Vec3f& p, Sampler& sam
   *beta /= q;
   return true;
 }
-constexpr int kUnboundedDepth = 1 << 12;  // a safety cap on path length when maxDepth is -1
 
 }  // namespace farm

@@ -3,6 +3,7 @@
 // Torrance-Sparrow reflection lobe whose Fresnel term is a dielectric's (the coat's), beside a
 // diffuse lobe; each lobe sampled with a probability, the density the mixture's (the
 // one-sample model of Veach 1997, 9.2.4), so that eval cos / pdf is the sample's weight.
+#include "common/sampling/warp.h"
 #include "common/scene/bsdfs/bsdf_model.h"
 #include "common/scene/bsdfs/microfacet.h"
 #include "common/scene/scene_description.h"
@@ -34,16 +35,6 @@ float diffuseOrGlossyPdf(float diffuseProbability, const GlossyLobe& glossy, con
 
 // A sample of the mixture of `model` (whose pdf and eval are the mixture's), from wo on the
 // front side.
-template <class Model>
-bool sampleDiffuseOrGlossy(const Model& model, float diffuseProbability, const GlossyLobe& glossy,
-                           const Vec3f& wo, const float u[3], TransportMode mode, BsdfSample* out);
-
-}  // namespace farm
-
-#include "common/sampling/warp.h"
-
-namespace farm {
-
 template <class Model>
 bool sampleDiffuseOrGlossy(const Model& model, float diffuseProbability, const GlossyLobe& glossy,
                            const Vec3f& wo, const float u[3], TransportMode mode, BsdfSample* out) {
