@@ -8,14 +8,14 @@
 #include "common/mcmc/primary_sample_integrand.h"
 #include "common/scene/bsdfs/fresnel.h"
 #include "common/scene/scene.h"
+#include "common/transport/path_tracer.h"
 #include "common/transport/specular_manifold.h"
 
 namespace farm {
 
 namespace {
 
-constexpr int kUnboundedLength = 10;
-constexpr int kMaxSpecularVertices = 2;
+constexpr int kMaxSpecularVertices = 4;
 constexpr uint64_t kMaxTrials = 10000;
 // Seeds near the crossing of the segment from z to y with a specular surface, this often; the
 // rest anywhere on the specular surfaces, which reaches every chain there is.
@@ -38,7 +38,7 @@ float reflectionProbability(const Scene& scene, const PathVertex& v, const Vec3f
 ManifoldNextEvent::ManifoldNextEvent(const Scene& scene, int maxDepth)
     : scene_(scene),
       maxDepth_(maxDepth),
-      maxLength_(maxDepth > 0 ? maxDepth : kUnboundedLength),
+      maxLength_(maxDepth > 0 ? maxDepth : kUnboundedDepth),
       context_{scene, maxDepth} {}
 
 bool ManifoldNextEvent::active() const {
@@ -117,7 +117,8 @@ bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool sev
   return manifoldWalk(context_, initial, 0, initial.length(), z, chain);
 }
 
-void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, Sampler& sampler,
+void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, double survival,
+                                Sampler& sampler,
                                 const std::function<void(const Path&, double)>& visit) const {
   const PathVertex& z = cameraPath.back();
   const float uPick = sampler.next(kLightStream);
@@ -170,7 +171,8 @@ void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, Sampl
   std::vector<char> delta(static_cast<size_t>(n));
   x.densities(scene_, pL.data(), pE.data(), delta.data());
   double logValue = f.logLuminance - std::log(pL[0]) -
-                    logSpecularChainMeasureRatio(scene_, x, 0, end) + std::log(double(trials));
+                    logSpecularChainMeasureRatio(scene_, x, 0, end) + std::log(double(trials)) -
+                    std::log(survival);
   for (int i = end; i < n - 1; ++i) logValue -= std::log(pE[size_t(i)]);
   const double value = std::exp(logValue);
   if (std::isfinite(value) && value > 0) visit(x, value);
@@ -190,6 +192,7 @@ void ManifoldNextEvent::sample(Sampler& sampler,
           ? camera.lensPoint({sampler.next(kCameraStream), sampler.next(kCameraStream)})
           : camera.position();
   Vec3f w = camera.generateRay(film, cameraPath[0].p).d;
+  double survival = 1;  // the chance the subpath has survived Russian roulette so far
   // z at `depth` edges from the camera makes a path of depth + 2 edges.
   for (int depth = 1; depth + 2 <= maxLength_; ++depth) {
     PathVertex z;
@@ -197,7 +200,7 @@ void ManifoldNextEvent::sample(Sampler& sampler,
     const Vec3f wo = normalize(cameraPath.back().p - z.p);
     cameraPath.push_back(z);
     const Bsdf bsdf = scene_.bsdfAt(z.shape, z.uv);
-    if (!bsdf.isDelta()) connect(cameraPath, sampler, visit);
+    if (!bsdf.isDelta()) connect(cameraPath, survival, sampler, visit);
     if (depth + 3 > maxLength_) return;
     const Frame frame(z.ns);
     const float u[3] = {sampler.next(kCameraStream), sampler.next(kCameraStream),
@@ -208,6 +211,14 @@ void ManifoldNextEvent::sample(Sampler& sampler,
       return;
     w = normalize(frame.toWorld(b.wi));
     if (!scene_.sidesAgree(w, z.n, z.ns)) return;
+    // Where the depth is unbounded the subpath ends by Russian roulette, as BDPT's do, and what
+    // it reaches afterwards is divided by the chance it went on (the path's density then holds
+    // that chance, so the estimate stays unbiased at every length).
+    if (maxDepth_ <= 0 && depth >= kRussianRouletteDepth) {
+      const float q = russianRouletteSurvival(maxComponent(b.weight));
+      if (sampler.next(kCameraStream) >= q) return;
+      survival *= double(q);
+    }
   }
 }
 

@@ -6,8 +6,9 @@
 // measure zero for BDPT's connections and needs its camera paths to hit the light, which a small
 // light makes rare: BDPT's candidates then miss that light, and so do Z and the seeds.
 //
-// One sample traces a camera subpath (a uniform film point, then BSDF sampling, no Russian
-// roulette) and at each non-specular vertex z picks a light point y; a seed point on a specular
+// One sample traces a camera subpath (a uniform film point, then BSDF sampling; where the depth
+// is unbounded, Russian roulette past a few edges, as in BDPT) and at each non-specular vertex z
+// picks a light point y; a seed point on a specular
 // surface (near where the segment from z to y crosses one, or anywhere on them), a ray from y
 // through it, specular bounces (each lobe drawn by its Fresnel share) until the ray meets a
 // non-specular surface, and a manifold walk (manifold_walk.h) of that end to z give a specular
@@ -20,12 +21,14 @@
 // against the chain integrated out) and K the count of trials.
 //
 // The paths it estimates (covers()) are those whose x_1 .. x_j are specular and x_{j+1} a
-// non-specular surface, from a light at a finite point: with j = 1 all of them, with j = 2 those
-// whose x_{j+2} is specular too (seen through glass or water, which BDPT reaches only by hitting
-// the light), and only over smooth specular shapes (Scene::smoothSpecularShape: not over a
-// faceted mesh, where it came out 19% low on the water caustic's waves with face normals, its
-// trials cut off at their cap). BDPT's strategies that build such a path are left out of the
-// bootstrap, so that the two estimate every path once between them.
+// non-specular surface, from a light at a finite point, at every length the depth allows: with
+// j = 1 all of them, with j = 2 .. 4 those whose x_{j+2} is specular too (seen through glass or
+// water, which BDPT reaches only by hitting the light: under a light a few millimetres wide,
+// practically never, so that leaving them to BDPT, or the paths longer than 10 edges, cost the
+// water caustic at index 1.0001 0.8% of Z), and only over smooth specular shapes
+// (Scene::smoothSpecularShape: not over a faceted mesh, where it came out 19% low on the water
+// caustic's waves with face normals, its trials cut off at their cap). BDPT's strategies that build
+// such a path are left out of the bootstrap, so that the two estimate every path once between them.
 #include <cstdint>
 #include <functional>
 
@@ -43,9 +46,6 @@ class ManifoldNextEvent {
   bool active() const;
   // Whether x is a path it estimates (and BDPT then does not).
   bool covers(const Path& x) const;
-  // The longest path it builds, in edges: maxDepth, or 10 where the depth is unbounded (longer
-  // paths of its kind stay with BDPT).
-  int maxLength() const { return maxLength_; }
 
   // One sample; `visit` receives each path built and the luminance of its value.
   void sample(Sampler& sampler, const std::function<void(const Path&, double)>& visit) const;
@@ -60,7 +60,7 @@ class ManifoldNextEvent {
   bool solve(const PathVertex& y, const PathVertex& z, bool severalAllowed, bool crossing,
              const Vec3f& crossingPoint, const Vec3f& crossingNormal, double sigma,
              Sampler& sampler, Path* chain) const;
-  void connect(const std::vector<PathVertex>& cameraPath, Sampler& sampler,
+  void connect(const std::vector<PathVertex>& cameraPath, double survival, Sampler& sampler,
                const std::function<void(const Path&, double)>& visit) const;
 
   const Scene& scene_;
