@@ -71,6 +71,8 @@ def render(farm, scene, algorithm, seconds, seed, depth, size, image):
                            '-o', image], capture_output=True, text=True)
     if done.returncode != 0:
         raise SystemExit(f'{image}: {done.stderr.strip()[-400:]}')
+    with open(os.path.splitext(image)[0] + '.log', 'w') as log:  # the report: Z, walks lost, ...
+        log.write(done.stdout + done.stderr)
     return image
 
 

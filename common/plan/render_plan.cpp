@@ -245,7 +245,8 @@ void RenderPlan::choose(Algorithm chosen) {
                        ""};
   if (manifoldNee.enabled) {
     manifoldNee.reason =
-        "the bootstrap connects diffuse vertices to lights through single specular vertices";
+        "the bootstrap connects diffuse vertices to lights through chains of up to four specular "
+        "vertices";
     if (s.facetedSpecularShapes > 0)
       manifoldNee.reason += "; paths over faceted specular shapes (" +
                             std::to_string(s.facetedSpecularShapes) +
