@@ -8,14 +8,13 @@
 //
 // One sample traces a camera subpath (a uniform film point, then BSDF sampling; where the depth
 // is unbounded, Russian roulette past a few edges, as in BDPT) and at each non-specular vertex z
-// picks a light point y; a seed point on a specular
-// surface (near where the segment from z to y crosses one, or anywhere on them), a ray from y
-// through it, specular bounces (each lobe drawn by its Fresnel share) until the ray meets a
-// non-specular surface, and a manifold walk (manifold_walk.h) of that end to z give a specular
-// chain joining them: a path y S+ z .. E. The walk is deterministic, but which of the chains
-// joining y and z it finds depends on the seed, with some probability P; the number of further
-// seeds drawn until the same chain is found again is geometric with mean 1 / P, an unbiased
-// estimate of it. So the path's value f / p is
+// picks a light point y; a seed point on a specular surface (near where the segment from z to y
+// crosses one, or anywhere on them), a ray from y through it, specular bounces (each lobe drawn by
+// its Fresnel share) until the ray meets a non-specular surface, and a manifold walk
+// (manifold_walk.h) of that end to z give a specular chain joining them: a path y S+ z .. E. The
+// walk is deterministic, but which of the chains joining y and z it finds depends on the seed, with
+// some probability P; the number of further seeds drawn until the same chain is found again is
+// geometric with mean 1 / P, an unbiased estimate of it. So the path's value f / p is
 //   f(x) / (ratio(x) p_light(y) p_camera(z .. E)) * K,
 // with ratio the specular chain's measure ratio (specular_manifold.h: Path's delta convention
 // against the chain integrated out) and K the count of trials.

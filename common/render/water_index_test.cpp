@@ -1,4 +1,8 @@
-// The water caustic at index 1.0001 (issue 43, part 1), against a reference that needs no photon
+// The index series of issue 43, part 1, against references that need no photon mapping: the
+// water caustic at index 1.0001 (below), and a glass ball in the Cornell box at three indices
+// against BDPT (GlassBallIndex, further down).
+//
+// The water caustic at index 1.0001, against a reference that needs no photon
 // mapping: near index 1 the water vanishes (Fresnel reflectance ~1e-9 at normal incidence,
 // refraction bending a ray by ~1e-4 rad), so the shared scene with its water taken out, which
 // BDPT renders well, is the limit the water's image converges to. The water's smooth-shaded
