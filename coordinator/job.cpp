@@ -169,8 +169,11 @@ void Job::prepare() {
     if (needsBootstrap(settings_.algorithm)) {
       z = ", Z = " + std::to_string(bootstrap_.normalization) + " +- " +
           std::to_string(bootstrap_.normalizationStdError) + " from " +
-          std::to_string(bootstrap_.candidates) + " candidates in " +
-          std::to_string(bootstrap_.seconds) + " s";
+          std::to_string(bootstrap_.candidates) + " candidates" +
+          (bootstrap_.pilotCandidates > 0
+               ? " after a pilot of " + std::to_string(bootstrap_.pilotCandidates)
+               : std::string()) +
+          " in " + std::to_string(bootstrap_.seconds) + " s";
       if (bootstrap_.candidatesForTime > 0 || bootstrap_.candidatesForError > 0) {
         z += " (the time share allows " + std::to_string(bootstrap_.candidatesForTime) +
              ", Z's error asks for " + std::to_string(bootstrap_.candidatesForError) + ")";

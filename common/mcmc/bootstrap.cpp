@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "common/mcmc/manifold_next_event.h"
@@ -27,8 +28,9 @@ namespace {
 // sum; its seed path is drawn from them by share. The lights the camera sees directly (paths
 // L E) are left to SeenEmission where it separates them: Z and the seeds are then those of the
 // chains' target, which excludes those paths.
-void visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
-                             const std::function<void(Path&&, double)>& visit) {
+// Returns the connections manifold next-event estimation gave up on.
+int64_t visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
+                                const std::function<void(Path&&, double)>& visit) {
   const bool separated = SeenEmission::separates(scene);
   Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
   IndependentSampler sampler(&rng);
@@ -48,18 +50,21 @@ void visitPathSpaceCandidate(const Scene& scene, int maxDepth, uint64_t seed, in
                          });
   // Its paths have a diffuse vertex (ManifoldNextEvent::covers): none is a light in view.
   manifold.sample(sampler, [&](const Path& x, double value) { visit(Path(x), value); });
+  return int64_t(manifold.abandoned());
 }
 
 }  // namespace
 
 double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
-                         int64_t index, std::vector<float>* primarySamples) {
+                         int64_t index, std::vector<float>* primarySamples, int64_t* abandoned) {
   if (algorithm == Algorithm::MLT) {
     double sum = 0;
-    visitPathSpaceCandidate(scene, maxDepth, seed, index,
-                            [&](Path&&, double share) { sum += share; });
+    const int64_t given = visitPathSpaceCandidate(scene, maxDepth, seed, index,
+                                                  [&](Path&&, double share) { sum += share; });
+    if (abandoned) *abandoned = given;
     return sum;
   }
+  if (abandoned) *abandoned = 0;
   thread_local std::vector<Splat> splats;
   Rng rng(seed, streamId(kCandidateDomain, uint64_t(index)));
   RecordingSampler recorder(&rng);
@@ -111,22 +116,40 @@ BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, 
 bool extendCandidates(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
                       int64_t count, BootstrapCandidates* out,
                       const std::function<bool(double)>& progress) {
+  return extendCandidates(
+      [&](int64_t index) {
+        int64_t abandoned = 0;
+        const double I =
+            evaluateCandidate(scene, algorithm, maxDepth, seed, index, nullptr, &abandoned);
+        return CandidateValue(I, abandoned);
+      },
+      count, out, progress);
+}
+
+bool extendCandidates(const CandidateEvaluator& evaluate, int64_t count, BootstrapCandidates* out,
+                      const std::function<bool(double)>& progress) {
   const int64_t first = int64_t(out->contributions.size());
   if (count <= first) return true;
   out->contributions.resize(size_t(count), 0.0);
   // Rounds of parallel work with a progress report (and a chance to cancel) between them; the
   // candidates do not depend on the rounds or the threads.
   const int64_t round = std::max<int64_t>((count - first) / 20, 4096);
+  std::atomic<int64_t> abandoned{0};
   for (int64_t begin = first; begin < count; begin += round) {
     const int64_t end = std::min(count, begin + round);
-    tbb::parallel_for(
-        tbb::blocked_range<int64_t>(begin, end, 256), [&](const tbb::blocked_range<int64_t>& r) {
-          for (int64_t i = r.begin(); i < r.end(); ++i) {
-            out->contributions[size_t(i)] = evaluateCandidate(scene, algorithm, maxDepth, seed, i);
-          }
-        });
+    tbb::parallel_for(tbb::blocked_range<int64_t>(begin, end, 256),
+                      [&](const tbb::blocked_range<int64_t>& r) {
+                        int64_t given = 0;
+                        for (int64_t k = r.begin(); k < r.end(); ++k) {
+                          const CandidateValue v = evaluate(out->firstIndex + k);
+                          out->contributions[size_t(k)] = v.contribution;
+                          given += v.abandoned;
+                        }
+                        if (given) abandoned += given;
+                      });
     if (progress && !progress(double(end - first) / double(count - first))) return false;
   }
+  out->abandoned += abandoned.load();
   // Mean and standard error in double, summed in index order: the same on every host.
   double sum = 0, sumSq = 0;
   out->nonZero = 0;

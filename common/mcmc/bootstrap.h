@@ -15,9 +15,15 @@
 namespace farm {
 
 struct BootstrapCandidates {
-  std::vector<double> contributions;  // I(u_i) per candidate
+  // I(u_i) per candidate: contributions[k] is the candidate of stream index firstIndex + k (the
+  // index evaluateCandidate(), candidatePath() and a chain's seed take).
+  std::vector<double> contributions;
+  int64_t firstIndex = 0;
   double mean = 0, stdError = 0;
   int64_t nonZero = 0;
+  // Connections manifold next-event estimation gave up on (ManifoldNextEvent::abandoned), each a
+  // path left out of its candidate's I.
+  int64_t abandoned = 0;
   // Var(I) / mean(I)^2, the square of Z's relative standard error times the count.
   double relativeVariance() const {
     return mean > 0 ? stdError * stdError * double(contributions.size()) / (mean * mean) : 0.0;
@@ -30,8 +36,10 @@ struct BootstrapCandidates {
 // luminance of the paths candidatePath() draws from: BDPT's, and where the scene has specular
 // surfaces, those of manifold next-event estimation in place of BDPT's of their kind
 // (manifold_next_event.h), which BDPT finds only through camera paths that hit the light.
+// `abandoned`, when given, receives the connections manifold next-event estimation gave up on.
 double evaluateCandidate(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
-                         int64_t index, std::vector<float>* primarySamples = nullptr);
+                         int64_t index, std::vector<float>* primarySamples = nullptr,
+                         int64_t* abandoned = nullptr);
 
 // Path-space seeds (mlt): candidate `index` rebuilt as the paths its sample built (BDPT's
 // strategies and manifold next-event estimation's paths, as evaluateCandidate() sums them), one
@@ -50,20 +58,32 @@ bool candidatePath(const Scene& scene, int maxDepth, uint64_t seed, int64_t inde
 void visitCandidateSplats(const Scene& scene, int maxDepth, uint64_t seed, int64_t index,
                           const std::function<void(const Splat&)>& visit);
 
+// I(u) of the candidate with stream index `index` and the connections given up on the way:
+// evaluateCandidate() with the job's scene, algorithm, depth and seed bound, or any other
+// integrand's (the tests' heavy-tailed ones).
+struct CandidateValue {
+  CandidateValue(double contribution = 0, int64_t abandoned = 0)  // NOLINT: a plain I converts
+      : contribution(contribution), abandoned(abandoned) {}
+  double contribution;
+  int64_t abandoned;
+};
+using CandidateEvaluator = std::function<CandidateValue(int64_t index)>;
+
 // Generates `count` candidates in parallel. `progress` receives the fraction done and may return
 // false to cancel (then the result is empty).
 BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, int maxDepth,
                                        uint64_t seed, int64_t count,
                                        const std::function<bool(double)>& progress = {});
 
-// Candidates `out->contributions.size()` .. count-1 added to `out` (the first ones as
-// generateCandidates() made them), and the figures over all of them; false when cancelled (then
-// `out` is unusable).
+// `out` extended to `count` candidates (stream indices out->firstIndex + its size on), and the
+// figures over all of them; false when cancelled (then `out` is unusable).
 bool extendCandidates(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
                       int64_t count, BootstrapCandidates* out,
                       const std::function<bool(double)>& progress = {});
+bool extendCandidates(const CandidateEvaluator& evaluate, int64_t count, BootstrapCandidates* out,
+                      const std::function<bool(double)>& progress = {});
 
-// Draws `n` candidate indices with probability proportional to contribution (systematic
+// Draws `n` positions in `contributions` with probability proportional to contribution (systematic
 // resampling with one random offset, which keeps the draws stratified).
 std::vector<int64_t> resampleSeeds(const std::vector<double>& contributions, int n, uint64_t seed);
 

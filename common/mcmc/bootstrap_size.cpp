@@ -1,6 +1,7 @@
 #include "common/mcmc/bootstrap_size.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace farm {
@@ -60,6 +61,64 @@ BootstrapSize bootstrapSize(Algorithm algorithm, int64_t plannedWork, int64_t pi
   size.candidates = std::clamp(std::max(size.forTime, size.forError),
                                bootstrapPilot(algorithm, plannedWork), kBootstrapMaxCandidates);
   return size;
+}
+
+bool drawSizedCandidates(const CandidateEvaluator& evaluate, const BootstrapRequest& request,
+                         SizedCandidates* out, const std::function<bool(double)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  *out = SizedCandidates();
+  BootstrapCandidates& c = out->candidates;
+  if (request.fixedCount > 0) return extendCandidates(evaluate, request.fixedCount, &c, progress);
+
+  // The pilot, doubled until enough of it carries light to measure the relative variance.
+  BootstrapCandidates pilot;
+  int64_t count = bootstrapPilot(request.algorithm, request.plannedWork);
+  if (!extendCandidates(evaluate, count, &pilot, progress)) return false;
+  while (pilot.nonZero < kBootstrapPilotLight && count < kBootstrapPilotMax) {
+    count = std::min(2 * count, kBootstrapPilotMax);
+    if (!extendCandidates(evaluate, count, &pilot, progress)) return false;
+  }
+  if (pilot.nonZero == 0) {  // no light at all: Z = 0, which the caller refuses with the count
+    c = std::move(pilot);
+    return true;
+  }
+  out->pilot = count;
+
+  // The candidates proper, from the pilot's end on: at least as many as the pilot, so that they
+  // meet light about as often.
+  c.firstIndex = count;
+  int64_t fresh = count;
+  if (request.plannedWork > 0) {
+    out->size = bootstrapSize(request.algorithm, request.plannedWork, request.pixels,
+                              pilot.relativeVariance());
+    fresh = std::max(fresh, out->size.candidates);
+    if (!extendCandidates(evaluate, fresh, &c, progress)) return false;
+  } else {
+    if (!extendCandidates(evaluate, fresh, &c, progress)) return false;
+    if (request.timeBudgetSeconds > 0) {
+      // A time budget: candidates until kBootstrapShare of it is spent, at the rate measured so
+      // far (no job-independent count exists, and the work such a job does differs per run).
+      const double budget = kBootstrapShare * request.timeBudgetSeconds;
+      while (fresh < kBootstrapMaxCandidates && elapsed() < budget) {
+        const double rate = double(count + fresh) / std::max(elapsed(), 1e-6);
+        const int64_t more = int64_t(std::min(rate * (budget - elapsed()), double(fresh)));
+        if (more < kBootstrapPilot) break;
+        fresh = std::min(fresh + more, kBootstrapMaxCandidates);
+        if (!extendCandidates(evaluate, fresh, &c, progress)) return false;
+      }
+      out->size.forTime = fresh;
+    }
+  }
+  // Where the pilot met light but these candidates met none (light that rare), more of them until
+  // some do: a stop their values decide, taken only where Z would otherwise be 0.
+  while (c.nonZero == 0 && fresh < kBootstrapPilotMax) {
+    fresh = std::min(2 * fresh, kBootstrapPilotMax);
+    if (!extendCandidates(evaluate, fresh, &c, progress)) return false;
+  }
+  return true;
 }
 
 }  // namespace farm

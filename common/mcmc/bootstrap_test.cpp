@@ -1,6 +1,6 @@
 // Seed resampling: every pick carries light, and picks follow the weights (systematic
 // resampling gives each candidate floor or ceil of n w_i / W picks). A candidate's splats carry
-// its I.
+// its I. The connections given up are counted for the candidates Z is made of.
 #include "common/mcmc/bootstrap.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 #include <limits>
 #include <vector>
 
+#include "common/mcmc/bootstrap_size.h"
 #include "common/render/render_job.h"
 #include "common/sampling/rng.h"
 #include "common/scene/test_scenes.h"
@@ -89,6 +90,37 @@ TEST(CandidateSplats, AddUpToEachCandidatesContribution) {
     if (I > 0) ++carrying;
   }
   EXPECT_GT(carrying, 1000);
+}
+
+// Each candidate's connections given up (manifold next-event estimation's, left out of its I)
+// are summed over the candidates Z is made of: a count from index 0, or those after a pilot,
+// whose own are not Z's. Here the first 1000 stream indices give up one each, and every seventh
+// after them two.
+TEST(ExtendCandidates, CountsTheConnectionsGivenUpForZsCandidates) {
+  const CandidateEvaluator evaluate = [](int64_t index) {
+    return CandidateValue(1.0 + double(index % 3), index < 1000 ? 1 : index % 7 == 0 ? 2 : 0);
+  };
+  const auto expected = [](int64_t first, int64_t count) {
+    int64_t n = 0;
+    for (int64_t i = first; i < first + count; ++i) n += i < 1000 ? 1 : i % 7 == 0 ? 2 : 0;
+    return n;
+  };
+  BootstrapCandidates c;
+  ASSERT_TRUE(extendCandidates(evaluate, 10000, &c));
+  EXPECT_EQ(c.abandoned, expected(0, 10000));
+  ASSERT_TRUE(extendCandidates(evaluate, 30000, &c));  // extended: the new ones added
+  EXPECT_EQ(c.abandoned, expected(0, 30000));
+
+  BootstrapRequest request;
+  request.algorithm = Algorithm::PSSMLT;
+  request.pixels = 1 << 12;
+  request.plannedWork = 1 << 16;
+  SizedCandidates sized;
+  ASSERT_TRUE(drawSizedCandidates(evaluate, request, &sized));
+  ASSERT_GE(sized.pilot, 1000);  // the first 1000 are the pilot's
+  const int64_t count = int64_t(sized.candidates.contributions.size());
+  EXPECT_EQ(sized.candidates.abandoned, expected(sized.pilot, count));
+  EXPECT_GE(expected(0, count), expected(sized.pilot, count) + 500);  // so the two differ
 }
 
 }  // namespace

@@ -126,46 +126,30 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  BootstrapCandidates c;
-  auto extend = [&](int64_t count) {
-    if (!extendCandidates(*scene_, settings_.algorithm, maxDepth, settings_.seed, count, &c,
-                          [&](double f) { return !progress || progress(Progress{f}); })) {
-      throw std::runtime_error("bootstrap cancelled");
-    }
-  };
-  int64_t count = settings_.bootstrapSamples;
-  if (count > 0) {
-    extend(count);
-  } else {
-    // The pilot, doubled until enough of it carries light to measure the relative variance.
-    const int64_t work = plannedWork();
-    count = bootstrapPilot(settings_.algorithm, work);
-    extend(count);
-    while (c.nonZero < kBootstrapPilotLight && count < kBootstrapPilotMax) {
-      count = std::min(2 * count, kBootstrapPilotMax);
-      extend(count);
-    }
-    if (work > 0) {
-      const BootstrapSize size =
-          bootstrapSize(settings_.algorithm, work, pixels, c.relativeVariance());
-      result.candidatesForTime = size.forTime;
-      result.candidatesForError = size.forError;
-      count = std::max(count, size.candidates);
-      extend(count);
-    } else if (settings_.timeBudgetSeconds > 0) {
-      // A time budget: candidates until kBootstrapShare of it is spent, at the rate measured so
-      // far (no job-independent count exists, and the work such a job does differs per run).
-      const double budget = kBootstrapShare * settings_.timeBudgetSeconds;
-      while (count < kBootstrapMaxCandidates && elapsed() < budget) {
-        const double rate = double(count) / std::max(elapsed(), 1e-6);
-        const int64_t more = int64_t(std::min(rate * (budget - elapsed()), double(count)));
-        if (more < kBootstrapPilot) break;
-        count = std::min(count + more, kBootstrapMaxCandidates);
-        extend(count);
-      }
-      result.candidatesForTime = count;
-    }
+  const int64_t work = plannedWork();
+  BootstrapRequest request;
+  request.algorithm = settings_.algorithm;
+  request.fixedCount = settings_.bootstrapSamples;
+  request.plannedWork = work;
+  request.pixels = pixels;
+  request.timeBudgetSeconds = settings_.timeBudgetSeconds;
+  SizedCandidates sized;
+  if (!drawSizedCandidates(
+          [&](int64_t index) {
+            int64_t abandoned = 0;
+            const double I = evaluateCandidate(*scene_, settings_.algorithm, maxDepth,
+                                               settings_.seed, index, nullptr, &abandoned);
+            return CandidateValue(I, abandoned);
+          },
+          request, &sized, [&](double f) { return !progress || progress(Progress{f}); })) {
+    throw std::runtime_error("bootstrap cancelled");
   }
+  const BootstrapCandidates& c = sized.candidates;
+  const int64_t count = int64_t(c.contributions.size());
+  result.pilotCandidates = sized.pilot;
+  result.abandonedConnections = c.abandoned;
+  result.candidatesForTime = sized.size.forTime;
+  result.candidatesForError = sized.size.forError;
   if (!(c.mean > 0)) {
     if (settings_.algorithm == Algorithm::MLT && SeenEmission::separates(*scene_)) {
       throw std::runtime_error(
@@ -188,8 +172,9 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   const int chains = settings_.numChains > 0 ? settings_.numChains : kDefaultChains;
   std::vector<int64_t> picks = resampleSeeds(c.contributions, chains, settings_.seed);
   const std::vector<double>& contributions = c.contributions;
+  const int64_t firstIndex = c.firstIndex;
   for (size_t c = 0; c < picks.size(); ++c) {
-    const int64_t i = picks[c];
+    const int64_t i = firstIndex + picks[c];  // the candidate's stream index
     if (settings_.algorithm == Algorithm::MLT) {
       // A path-space seed: one of the candidate's strategies, by its share of the luminance.
       Rng pick(settings_.seed, streamId(kPathSeedDomain, c));
@@ -218,7 +203,7 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
                                    " and 64 others carry light but build no path a chain can "
                                    "start from: this host computes differently from itself");
         const uint64_t hi = pick.nextUint(), lo = pick.nextUint();  // in this order
-        candidate = resampleSeeds(contributions, 1, (hi << 32) | lo)[0];
+        candidate = firstIndex + resampleSeeds(contributions, 1, (hi << 32) | lo)[0];
       }
       result.seedPaths.push_back(path.serialize());
       result.seedContributions.push_back(

@@ -24,7 +24,11 @@ struct BootstrapResult {
   // candidates' sample variance). Zero for pt/bdpt, which need no bootstrap.
   double normalization = 0;
   double normalizationStdError = 0;
-  int64_t candidates = 0;         // candidate paths generated
+  int64_t candidates = 0;       // candidate paths behind Z and the seeds
+  int64_t pilotCandidates = 0;  // the pilot's, drawn before them to size them (bootstrap_size.h)
+  // Of the candidates, connections manifold next-event estimation gave up on (each a path found
+  // in fewer than one in 10^4 trials, left out of Z: ManifoldNextEvent::abandoned).
+  int64_t abandonedConnections = 0;
   int64_t nonZeroCandidates = 0;  // of them, those carrying light
   // What sized the count (common/mcmc/bootstrap_size.h), when the settings did not fix it: the
   // count the time share allows and the one Z's error asks for (0: not asked).

@@ -176,9 +176,9 @@ TEST(GlassBallIndex, MltMeetsBdptAtEveryIndex) {
     d.bsdfs.push_back(glass);
     d.shapes.push_back(sphereShape(Vec3f(-0.45f, 0.25f, 0.5f), 0.25f, int(d.bsdfs.size()) - 1));
     const std::vector<Image> bdpt = renders(d, Algorithm::Bidirectional, 256, 4, 501);
-    // 2^16 candidates: with the job's own count (a few thousand at this size) mlt came out 0.8%,
-    // 1.0% and 2.5% low at these indices (-1.2, -1.8 and -3.1 standard errors), and within
-    // 0.25% with 2^17; a small bootstrap's bias, to be found (docs/specular.md).
+    // 2^16 candidates: at the job's own count (a few thousand at this size) Z is skewed, most
+    // renders a little low and a few high, and six renders' spread understates its error
+    // (docs/specular.md; the pilot's bias that also made them low is mended).
     const std::vector<Image> mlt = renders(d, Algorithm::MLT, 512, 6, 601, 1 << 16);
     const std::vector<bool> keep = withoutTheLight(bdpt);
     const Comparison c = compareMeans(mlt, bdpt, keep, 0, "glass ball at " + std::to_string(ior));
