@@ -49,6 +49,7 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->bootstrapSeconds = m.bootstrap_seconds();
   p->bootstrapCandidates = m.bootstrap_candidates();
   p->largeSteps = m.large_steps();
+  p->abandonedConnections = m.abandoned_connections();
   p->renderSeconds = m.render_seconds();
   p->chainsTotal = m.chains_total();
   p->chainsFinished = m.chains_finished();

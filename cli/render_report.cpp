@@ -196,6 +196,12 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
         << (p.largeSteps > 0 ? " and " + std::to_string(p.largeSteps) + " large steps" : "")
         << "; an average pixel's at one splat per unit of work: "
         << format("%.3g", 100 * pixelErrorModel(p)) << "%)\n";
+    // Each a path its estimator would have found in fewer than one in 10^4 trials: left out of
+    // Z, a bias of about that share of a candidate's light each (manifold_next_event.h).
+    if (p.abandonedConnections > 0)
+      out << "  manifold next-event estimation gave up on " << p.abandonedConnections
+          << " connection(s) among the candidates (paths found in fewer than one in 10^4 "
+             "trials, left out of Z)\n";
   }
   out << "  " << workUnit(s) << ": " << p.workDone << " ("
       << format("%.2f", pixels > 0 ? p.workDone / pixels : 0) << " per pixel), "

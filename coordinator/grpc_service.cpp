@@ -84,6 +84,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   m->set_bootstrap_seconds(p.bootstrapSeconds);
   m->set_bootstrap_candidates(p.bootstrapCandidates);
   m->set_large_steps(p.largeSteps);
+  m->set_abandoned_connections(p.abandonedConnections);
   m->set_chains_total(p.chainsTotal);
   m->set_chains_finished(p.chainsFinished);
   m->set_chains_leased(p.chainsLeased);

@@ -747,6 +747,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   p.normalization = z.value;
   p.normalizationStdError = z.stdError;
   p.bootstrapCandidates = bootstrap_.candidates;
+  p.abandonedConnections = bootstrap_.abandonedConnections;
   p.largeSteps = aggregator_ ? aggregator_->largeSteps().count : 0;
   p.plannedWork = plannedWork_;
   p.width = width_;

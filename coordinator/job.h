@@ -62,6 +62,7 @@ struct JobProgress {
   double normalization = 0, normalizationStdError = 0;
   int64_t bootstrapCandidates = 0;
   int64_t largeSteps = 0;  // the chains' large steps pooled into normalization (with the above)
+  int64_t abandonedConnections = 0;  // BootstrapResult's: paths left out of normalization
   double loadSeconds = 0, bootstrapSeconds = 0, renderSeconds = 0;
   uint32_t chainsTotal = 0, chainsFinished = 0, chainsLeased = 0;
   uint32_t activeWorkers = 0;  // distinct workers holding a lease of the job's chains

@@ -188,6 +188,7 @@ std::string encodePlan(const JobPlan& plan) {
   r.set_candidates(plan.bootstrap.candidates);
   r.set_non_zero_candidates(plan.bootstrap.nonZeroCandidates);
   r.set_bootstrap_seconds(plan.bootstrap.seconds);
+  r.set_abandoned_connections(plan.bootstrap.abandonedConnections);
   for (const ChainSpec& chain : plan.chains) *r.add_chains() = toProto(chain);
   r.set_planned_work(plan.plannedWork);
   r.set_width(plan.width);
@@ -210,6 +211,7 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   plan->bootstrap.candidates = r.candidates();
   plan->bootstrap.nonZeroCandidates = r.non_zero_candidates();
   plan->bootstrap.seconds = r.bootstrap_seconds();
+  plan->bootstrap.abandonedConnections = r.abandoned_connections();
   for (const v1::ChainSpec& c : r.chains()) {
     ChainSpec chain;
     if (!fromProto(c, &chain, error)) return false;

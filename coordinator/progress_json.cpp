@@ -40,6 +40,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["bootstrap_seconds"] = p.bootstrapSeconds;
   j["bootstrap_candidates"] = p.bootstrapCandidates;
   j["large_steps"] = p.largeSteps;  // pooled into normalization with the candidates
+  j["abandoned_connections"] = p.abandonedConnections;
   j["render_seconds"] = p.renderSeconds;
   j["chains_total"] = p.chainsTotal;
   j["chains_finished"] = p.chainsFinished;

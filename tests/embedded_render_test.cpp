@@ -146,6 +146,14 @@ TEST(EmbeddedRender, ReportShowsTheBootstrapsSizeAndZsShareOfTheError) {
   char expected[96];
   std::snprintf(expected, sizeof(expected), "alone would make about %.2g%% of it", share);
   EXPECT_NE(report.find(expected), std::string::npos) << expected << "\n" << report;
+  // Connections manifold next-event estimation gave up on: named only where there are some.
+  EXPECT_EQ(p.abandonedConnections, 0);  // pssmlt has no such estimator
+  EXPECT_EQ(report.find("gave up on"), std::string::npos) << report;
+  JobProgress withSome = p;
+  withSome.abandonedConnections = 3;
+  EXPECT_NE(finalReport(withSome, "cornell-box", reference).find("gave up on 3 connection(s)"),
+            std::string::npos);
+  EXPECT_EQ(progressJson(withSome)["abandoned_connections"].get<int64_t>(), 3);
 }
 
 // --flush-every sets the work between a chain's flushes; the image does not depend on it.
