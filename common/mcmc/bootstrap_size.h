@@ -23,10 +23,9 @@
 // The pilot sizes the bootstrap and takes no part in it: Z and the seeds come from candidates
 // drawn after it, whose count it fixed. A count chosen by the values it then averages biases the
 // average: where light comes in rare bright candidates, a pilot that met one measures a large
-// variance and asks for many more, which dilute it, and one that met none stops early, low. On
-// the glass ball at index 2.4 (32x32, mlt, 512 mutations a pixel) the count so chosen ranged over
-// 3093-140107 candidates by seed, and the mean image over 200 seeds came out 0.48% dark (2.8
-// standard errors) with Z as low; docs/specular.md has the measurement.
+// variance and asks for many more, which dilute it, and one that met none stops early, low
+// (mlt's images of a glass ball came out dark on average: docs/specular.md). Given the count,
+// the candidates drawn after the pilot average to Z whatever it was.
 #include <cstdint>
 #include <functional>
 
