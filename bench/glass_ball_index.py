@@ -67,7 +67,7 @@ def main():
 
         def run(algorithm, seconds, seed):
             return load(render(a.farm, scene, algorithm, seconds, seed, a.depth, a.size,
-                               os.path.join(a.out, f'{index}-{algorithm}-{tag}-{seed}.exr')))
+                               os.path.join(a.out, f'{index}-{algorithm}-{seconds:g}s-{tag}-{seed}.exr')))
 
         refs = [run('bdpt', a.reference_seconds, s) for s in (1, 2)]
         ref = sum(refs) / 2
