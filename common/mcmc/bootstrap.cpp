@@ -116,14 +116,18 @@ BootstrapCandidates generateCandidates(const Scene& scene, Algorithm algorithm, 
 bool extendCandidates(const Scene& scene, Algorithm algorithm, int maxDepth, uint64_t seed,
                       int64_t count, BootstrapCandidates* out,
                       const std::function<bool(double)>& progress) {
-  return extendCandidates(
-      [&](int64_t index) {
-        int64_t abandoned = 0;
-        const double I =
-            evaluateCandidate(scene, algorithm, maxDepth, seed, index, nullptr, &abandoned);
-        return CandidateValue(I, abandoned);
-      },
-      count, out, progress);
+  return extendCandidates(candidateEvaluator(scene, algorithm, maxDepth, seed), count, out,
+                          progress);
+}
+
+CandidateEvaluator candidateEvaluator(const Scene& scene, Algorithm algorithm, int maxDepth,
+                                      uint64_t seed) {
+  return [&scene, algorithm, maxDepth, seed](int64_t index) {
+    int64_t abandoned = 0;
+    const double I =
+        evaluateCandidate(scene, algorithm, maxDepth, seed, index, nullptr, &abandoned);
+    return CandidateValue(I, abandoned);
+  };
 }
 
 bool extendCandidates(const CandidateEvaluator& evaluate, int64_t count, BootstrapCandidates* out,

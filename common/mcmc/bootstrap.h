@@ -68,6 +68,10 @@ struct CandidateValue {
   int64_t abandoned;
 };
 using CandidateEvaluator = std::function<CandidateValue(int64_t index)>;
+// evaluateCandidate() for a job's scene, algorithm, depth and seed (the scene is held by
+// reference).
+CandidateEvaluator candidateEvaluator(const Scene& scene, Algorithm algorithm, int maxDepth,
+                                      uint64_t seed);
 
 // Generates `count` candidates in parallel. `progress` receives the fraction done and may return
 // false to cancel (then the result is empty).

@@ -135,13 +135,8 @@ BootstrapResult RenderJob::bootstrap(const ProgressCallback& progress) const {
   request.timeBudgetSeconds = settings_.timeBudgetSeconds;
   SizedCandidates sized;
   if (!drawSizedCandidates(
-          [&](int64_t index) {
-            int64_t abandoned = 0;
-            const double I = evaluateCandidate(*scene_, settings_.algorithm, maxDepth,
-                                               settings_.seed, index, nullptr, &abandoned);
-            return CandidateValue(I, abandoned);
-          },
-          request, &sized, [&](double f) { return !progress || progress(Progress{f}); })) {
+          candidateEvaluator(*scene_, settings_.algorithm, maxDepth, settings_.seed), request,
+          &sized, [&](double f) { return !progress || progress(Progress{f}); })) {
     throw std::runtime_error("bootstrap cancelled");
   }
   const BootstrapCandidates& c = sized.candidates;
