@@ -11,6 +11,7 @@
 
 #include "cli/local_chain_source.h"
 #include "coordinator/coordinator.h"
+#include "coordinator/coordinator_test_support.h"
 #include "tests/test_support.h"
 #include "worker/worker_pool.h"
 
@@ -37,15 +38,6 @@ JobSpec smallJob() {
   return spec;
 }
 
-std::string registerWorker(Coordinator& coordinator) {
-  WorkerInfo info;
-  info.threads = 2;
-  for (Algorithm a : allAlgorithms()) info.capabilities.insert(a);
-  std::string id;
-  EXPECT_TRUE(coordinator.registerWorker(info, &id).isOk());
-  return id;
-}
-
 // Milliseconds from `from` to `to` (steady clock ticks since its epoch).
 double msBetween(Clock::duration from, Clock::duration to) {
   return std::chrono::duration<double, std::milli>(to - from).count();
@@ -69,7 +61,7 @@ class LeaseWait : public ::testing::Test {
 
 TEST_F(LeaseWait, WaitingLeaseGetsTheChainsWhenTheBootstrapEnds) {
   Coordinator coordinator(options_);
-  const std::string worker = registerWorker(coordinator);
+  const std::string worker = registerTestWorker(coordinator, 2);
   std::string job;
   ASSERT_TRUE(coordinator.submit(smallJob(), &job).isOk());
   // Loading and the bootstrap (20000 candidates) are still ahead: only a wait gets chains, and
@@ -99,7 +91,7 @@ TEST_F(LeaseWait, WaitingLeaseGetsTheChainsWhenTheBootstrapEnds) {
 
 TEST_F(LeaseWait, ExpiredLeaseWakesAWaitingWorkerAtOnce) {
   Coordinator coordinator(options_);
-  const std::string a = registerWorker(coordinator), b = registerWorker(coordinator);
+  const std::string a = registerTestWorker(coordinator, 2), b = registerTestWorker(coordinator, 2);
   std::string job;
   ASSERT_TRUE(coordinator.submit(smallJob(), &job).isOk());
   std::vector<WorkerLease> held;
@@ -129,7 +121,7 @@ TEST_F(LeaseWait, ExpiredLeaseWakesAWaitingWorkerAtOnce) {
 
 TEST_F(LeaseWait, ShutdownAndAbandonedCallersEndTheWait) {
   Coordinator coordinator(options_);
-  const std::string worker = registerWorker(coordinator);
+  const std::string worker = registerTestWorker(coordinator, 2);
   std::vector<WorkerLease> leases;
 
   // No job at all: the caller goes away after 100 ms and the wait ends with it.

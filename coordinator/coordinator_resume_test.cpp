@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "coordinator/coordinator.h"
+#include "coordinator/coordinator_test_support.h"
 #include "coordinator/job_store.h"
 #include "tests/test_support.h"
 
@@ -41,19 +42,7 @@ std::string submitAndWait(Coordinator& coordinator, const RenderSettings& settin
   spec.settings = settings;
   spec.scenePath = kScene;
   spec.name = "cornell";
-  std::string id;
-  Status s = coordinator.submit(spec, &id);
-  EXPECT_TRUE(s.isOk()) << s.message();
-  for (int i = 0; i < 1200; ++i) {
-    JobProgress p;
-    coordinator.progress(id, 0, &p);
-    if (p.phase == JobPhase::kRendering) return id;
-    EXPECT_FALSE(isTerminal(p.phase)) << p.error;
-    if (isTerminal(p.phase)) return id;
-    std::this_thread::sleep_for(milliseconds(50));
-  }
-  ADD_FAILURE() << "job did not start rendering";
-  return id;
+  return submitAndWaitForRendering(coordinator, spec);
 }
 
 // Runs a leased chain; uploads at most `maxFlushes` flushes (then "dies").
@@ -73,15 +62,6 @@ int runLease(Coordinator& coordinator, const std::string& worker, const WorkerLe
     return !ack.stop;
   });
   return uploaded;
-}
-
-std::string registerWorker(Coordinator& coordinator) {
-  WorkerInfo info;
-  info.threads = 1;
-  for (Algorithm a : allAlgorithms()) info.capabilities.insert(a);
-  std::string id;
-  EXPECT_TRUE(coordinator.registerWorker(info, &id).isOk());
-  return id;
 }
 
 Image finish(Coordinator& coordinator, const std::string& job) {
@@ -115,7 +95,7 @@ TEST_P(ResumeTest, ReleasedChainResumesAndTheImageIsUnchanged) {
 
   // Uninterrupted reference run.
   const std::string straight = submitAndWait(coordinator, settings);
-  const std::string workerA = registerWorker(coordinator);
+  const std::string workerA = registerTestWorker(coordinator, 1);
   std::vector<WorkerLease> leases;
   ASSERT_TRUE(coordinator.leaseChains(workerA, 8, &leases).isOk());
   ASSERT_EQ(leases.size(), 2u);
@@ -124,7 +104,7 @@ TEST_P(ResumeTest, ReleasedChainResumesAndTheImageIsUnchanged) {
 
   // Interrupted run: chain 0's worker vanishes after its first flush.
   const std::string interrupted = submitAndWait(coordinator, settings);
-  const std::string workerB = registerWorker(coordinator);
+  const std::string workerB = registerTestWorker(coordinator, 1);
   ASSERT_TRUE(coordinator.leaseChains(workerB, 8, &leases).isOk());
   ASSERT_EQ(leases.size(), 2u);
   EXPECT_EQ(runLease(coordinator, workerB, leases[0], 1), 1);
@@ -135,7 +115,7 @@ TEST_P(ResumeTest, ReleasedChainResumesAndTheImageIsUnchanged) {
   EXPECT_EQ(p.workDone, 4096 + 8192);
 
   // Nothing to lease until the lease expires; then chain 0 comes back at flush 1.
-  const std::string workerC = registerWorker(coordinator);
+  const std::string workerC = registerTestWorker(coordinator, 1);
   ASSERT_TRUE(coordinator.leaseChains(workerC, 8, &leases).isOk());
   EXPECT_TRUE(leases.empty());
   coordinator.tick(SteadyClock::now() + std::chrono::seconds(61));
@@ -208,7 +188,7 @@ TEST_P(DurableResumeTest, RestartedCoordinatorGoesOnFromItsLastFlush) {
     options.dataDir = scratch / "straight";
     Coordinator coordinator(options);
     const std::string job = submitAndWait(coordinator, settings);
-    const std::string worker = registerWorker(coordinator);
+    const std::string worker = registerTestWorker(coordinator, 1);
     std::vector<WorkerLease> leases;
     ASSERT_TRUE(coordinator.leaseChains(worker, 8, &leases).isOk());
     for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(coordinator, worker, lease, 99), 4);
@@ -227,7 +207,7 @@ TEST_P(DurableResumeTest, RestartedCoordinatorGoesOnFromItsLastFlush) {
     Coordinator first(options);
     EXPECT_TRUE(first.durable());
     job = submitAndWait(first, settings);
-    oldWorker = registerWorker(first);
+    oldWorker = registerTestWorker(first, 1);
     ASSERT_TRUE(first.leaseChains(oldWorker, 8, &oldLeases).isOk());
     ASSERT_EQ(oldLeases.size(), 2u);
     auto renderJob = first.renderJob(job);
@@ -291,7 +271,7 @@ TEST_P(DurableResumeTest, RestartedCoordinatorGoesOnFromItsLastFlush) {
     // before the restart is known.
     std::vector<WorkerLease> leases;
     EXPECT_EQ(again.leaseChains(oldWorker, 8, &leases).code(), StatusCode::kNotFound);
-    const std::string worker = registerWorker(again);
+    const std::string worker = registerTestWorker(again, 1);
     FlushAck ack;
     ChainFlush copy = replayed;
     ASSERT_TRUE(
@@ -368,7 +348,7 @@ TEST(DurableResumeAuto, ARestartKeepsThePilotsPickAndThePlan) {
     EXPECT_NE(plan.find(std::string("algorithm: ") + algorithmName(before.settings.algorithm)),
               std::string::npos)
         << plan;
-    const std::string worker = registerWorker(first);
+    const std::string worker = registerTestWorker(first, 1);
     std::vector<WorkerLease> leases;
     ASSERT_TRUE(first.leaseChains(worker, 8, &leases).isOk());
     ASSERT_FALSE(leases.empty());
@@ -382,7 +362,7 @@ TEST(DurableResumeAuto, ARestartKeepsThePilotsPickAndThePlan) {
   EXPECT_EQ(after.settings.algorithm, before.settings.algorithm);
   EXPECT_FALSE(after.settings.autoAlgorithm) << "the planned settings, not the submitted ones";
   EXPECT_EQ(after.renderPlan, before.renderPlan);
-  const std::string worker = registerWorker(again);
+  const std::string worker = registerTestWorker(again, 1);
   std::vector<WorkerLease> leases;
   ASSERT_TRUE(again.leaseChains(worker, 8, &leases).isOk());
   ASSERT_FALSE(leases.empty());
@@ -402,7 +382,7 @@ TEST(FaultsCountOnce, LateFlushFromAnOlderLease) {
   const RenderSettings settings = smallJob(Algorithm::PSSMLT);
 
   const std::string straight = submitAndWait(coordinator, settings);
-  const std::string worker = registerWorker(coordinator);
+  const std::string worker = registerTestWorker(coordinator, 1);
   std::vector<WorkerLease> leases;
   ASSERT_TRUE(coordinator.leaseChains(worker, 8, &leases).isOk());
   for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(coordinator, worker, lease, 99), 2);
@@ -411,8 +391,8 @@ TEST(FaultsCountOnce, LateFlushFromAnOlderLease) {
   for (bool lateFirst : {true, false}) {
     SCOPED_TRACE(lateFirst ? "the late flush first" : "the new holder first");
     const std::string job = submitAndWait(coordinator, settings);
-    const std::string slow = registerWorker(coordinator);
-    const std::string fresh = registerWorker(coordinator);
+    const std::string slow = registerTestWorker(coordinator, 1);
+    const std::string fresh = registerTestWorker(coordinator, 1);
     std::vector<WorkerLease> old, now;
     ASSERT_TRUE(coordinator.leaseChains(slow, 8, &old).isOk());
     ASSERT_EQ(old.size(), 2u);
@@ -462,7 +442,7 @@ TEST(FaultsCountOnce, WorkerFailingAChainRepeatedlyIsSetAside) {
   Coordinator coordinator(options);
   const std::string job = submitAndWait(coordinator, smallJob(Algorithm::PathTracing));
 
-  const std::string hanging = registerWorker(coordinator);
+  const std::string hanging = registerTestWorker(coordinator, 1);
   std::vector<WorkerLease> leases;
   auto later = SteadyClock::now();
   for (int attempt = 1; attempt <= 2; ++attempt) {
@@ -475,7 +455,7 @@ TEST(FaultsCountOnce, WorkerFailingAChainRepeatedlyIsSetAside) {
   EXPECT_TRUE(leases.empty()) << "a set-aside worker got chains again";
 
   // One that sends NaN twice for the same chain goes the same way.
-  const std::string broken = registerWorker(coordinator);
+  const std::string broken = registerTestWorker(coordinator, 1);
   ASSERT_TRUE(coordinator.leaseChains(broken, 1, &leases).isOk());
   ASSERT_EQ(leases.size(), 1u);
   for (int attempt = 1; attempt <= 2; ++attempt) {
@@ -504,7 +484,7 @@ TEST(FaultsCountOnce, WorkerFailingAChainRepeatedlyIsSetAside) {
 
   // Someone else finishes it (the broken worker's lease expires first).
   coordinator.tick(later + std::chrono::seconds(61));
-  const std::string good = registerWorker(coordinator);
+  const std::string good = registerTestWorker(coordinator, 1);
   ASSERT_TRUE(coordinator.leaseChains(good, 8, &leases).isOk());
   ASSERT_EQ(leases.size(), 2u);
   for (const WorkerLease& lease : leases) EXPECT_EQ(runLease(coordinator, good, lease, 99), 2);
@@ -527,7 +507,7 @@ TEST(FaultsCountOnce, AChainThatFailsOnThreeWorkersFailsTheJob) {
     JobProgress before;
     coordinator.progress(job, 0, &before);
     EXPECT_EQ(before.phase, JobPhase::kRendering) << "after " << w - 1 << " workers";
-    const std::string worker = registerWorker(coordinator);
+    const std::string worker = registerTestWorker(coordinator, 1);
     std::vector<WorkerLease> leases;
     ASSERT_TRUE(coordinator.leaseChains(worker, 8, &leases).isOk());
     ASSERT_EQ(leases.size(), 2u) << "worker " << w;

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "coordinator/coordinator.h"
+#include "coordinator/coordinator_test_support.h"
 #include "tests/test_support.h"
 #include "worker/flush_batcher.h"
 
@@ -38,25 +39,7 @@ std::string submitAndWait(Coordinator& coordinator) {
   JobSpec spec;
   spec.settings = twoChains();
   spec.scenePath = kScene;
-  std::string id;
-  EXPECT_TRUE(coordinator.submit(spec, &id).isOk());
-  for (int i = 0; i < 1200; ++i) {
-    JobProgress p;
-    coordinator.progress(id, 0, &p);
-    if (p.phase == JobPhase::kRendering || isTerminal(p.phase)) return id;
-    std::this_thread::sleep_for(milliseconds(50));
-  }
-  ADD_FAILURE() << "the job did not start rendering";
-  return id;
-}
-
-std::string registerWorker(Coordinator& coordinator) {
-  WorkerInfo info;
-  info.threads = 2;
-  for (Algorithm a : allAlgorithms()) info.capabilities.insert(a);
-  std::string id;
-  EXPECT_TRUE(coordinator.registerWorker(info, &id).isOk());
-  return id;
+  return submitAndWaitForRendering(coordinator, spec);
 }
 
 // Every flush of the two leased chains, by chain and index.
@@ -135,7 +118,7 @@ TEST_P(BatchedFlushes, CountOnceWholeOrNotAtAll) {
     options.dataDir = scratch / "straight";
     Coordinator coordinator(options);
     const std::string job = submitAndWait(coordinator);
-    const std::string worker = registerWorker(coordinator);
+    const std::string worker = registerTestWorker(coordinator, 2);
     std::vector<WorkerLease> leases;
     ASSERT_TRUE(coordinator.leaseChains(worker, 2, &leases).isOk());
     for (auto& chain : renderFlushes(coordinator, leases)) {
@@ -154,7 +137,7 @@ TEST_P(BatchedFlushes, CountOnceWholeOrNotAtAll) {
   options.leaseSeconds = 60;
   auto coordinator = std::make_unique<Coordinator>(options);
   const std::string job = submitAndWait(*coordinator);
-  std::string worker = registerWorker(*coordinator);
+  std::string worker = registerTestWorker(*coordinator, 2);
   std::vector<WorkerLease> leases;
   ASSERT_TRUE(coordinator->leaseChains(worker, 2, &leases).isOk());
   ASSERT_EQ(leases.size(), 2u);
@@ -206,7 +189,7 @@ TEST_P(BatchedFlushes, CountOnceWholeOrNotAtAll) {
     coordinator.reset();
     coordinator = std::make_unique<Coordinator>(options);
     EXPECT_EQ(workDone(*coordinator, job), 4 * 4096) << "the batches replayed from the log";
-    worker = registerWorker(*coordinator);
+    worker = registerTestWorker(*coordinator, 2);
     std::vector<WorkerLease> again;
     ASSERT_TRUE(coordinator->leaseChains(worker, 2, &again).isOk());
     ASSERT_EQ(again.size(), 2u);
@@ -246,7 +229,7 @@ TEST(BatchedFlushes, ABatchOfTwoErrorGroupsIsRefused) {
   ASSERT_TRUE(coordinator.submit(spec, &job).isOk());
   for (int i = 0; i < 1200 && !coordinator.renderJob(job); ++i)
     std::this_thread::sleep_for(milliseconds(50));
-  const std::string worker = registerWorker(coordinator);
+  const std::string worker = registerTestWorker(coordinator, 2);
   std::vector<WorkerLease> leases;
   ASSERT_TRUE(coordinator.leaseChains(worker, 2, &leases).isOk());
   ASSERT_EQ(leases.size(), 2u);
