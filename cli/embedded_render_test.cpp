@@ -83,6 +83,46 @@ TEST(EmbeddedRender, ZPoolsTheLargeStepsAsARenderHereDoes) {
   }
 }
 
+// With Kelemen's combination (--combine-large-steps) the large steps are part of the image and
+// not samples of Z: the setting reaches the workers (the image is not the chain's alone), the
+// image is the one a render here makes, and Z is the bootstrap's.
+TEST(EmbeddedRender, CombinedLargeStepsReachTheWorkersAndLeaveZAlone) {
+  for (Algorithm a : {Algorithm::PSSMLT, Algorithm::MMLT}) {
+    EmbeddedRenderOptions o = options(a, 2, 1);
+    EmbeddedRenderResult alone;
+    Status s = renderEmbedded(o, &alone);
+    ASSERT_TRUE(s.isOk()) << s.message();
+    o.settings.combineLargeSteps = true;
+    EmbeddedRenderResult farm;
+    s = renderEmbedded(o, &farm);
+    ASSERT_TRUE(s.isOk()) << s.message();
+    RenderSettings settings = o.settings;
+    const LocalRenderResult here =
+        renderLocally(RenderJob(loadScene(kScene, settings), settings, "here"));
+    EXPECT_EQ(here.largeSteps.count, 0) << algorithmName(a);
+    EXPECT_EQ(farm.progress.largeSteps, 0) << algorithmName(a);
+    EXPECT_NEAR(farm.progress.normalization, here.bootstrap.normalization,
+                1e-9 * here.bootstrap.normalization)
+        << algorithmName(a);
+    ASSERT_EQ(farm.image.rgb.size(), here.image.rgb.size());
+    size_t differ = 0;
+    for (size_t i = 0; i < here.image.rgb.size(); ++i) {
+      ASSERT_NEAR(farm.image.rgb[i], here.image.rgb[i], 1e-5 * std::max(1.0f, here.image.rgb[i]))
+          << algorithmName(a) << " value " << i;
+      if (std::abs(farm.image.rgb[i] - alone.image.rgb[i]) > 1e-4f * alone.image.rgb[i]) ++differ;
+    }
+    EXPECT_GT(differ, here.image.rgb.size() / 2) << algorithmName(a);
+    EXPECT_EQ(farm.metadata.at("farm:combineLargeSteps"), "1");
+  }
+  // Only a chain in primary sample space has large steps to combine; auto may pick one.
+  RenderSettings s = options(Algorithm::Bidirectional, 1, 1).settings;
+  s.combineLargeSteps = true;
+  EXPECT_NE(s.validate().find("--combine-large-steps weights large steps into a chain"),
+            std::string::npos);
+  s.autoAlgorithm = true;
+  EXPECT_EQ(s.validate(), "");
+}
+
 TEST(EmbeddedRender, TimeBudgetStopsTheChains) {
   EmbeddedRenderOptions o = options(Algorithm::PathTracing, 2, 1);
   o.settings.timeBudgetSeconds = 1.0;

@@ -70,6 +70,7 @@ struct RenderOptions {
   int errorGroups = 0;
   bool noPlan = false;
   bool pilot = false;
+  bool combineLargeSteps = false;
   std::string shadingNormals = "scene";
   int maxDepth = 0;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
@@ -95,6 +96,10 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "probability of a large step, a fresh independent sample (pssmlt, pssmlt-pt, "
                    "mmlt; Kelemen et al. 2002)")
       ->default_str(std::to_string(o->largeStep).substr(0, 3));
+  command->add_flag("--combine-large-steps", o->combineLargeSteps,
+                    "pssmlt, pssmlt-pt, mmlt: count each large step's proposal also as an "
+                    "independent sample, weighted against the chain by multiple importance "
+                    "sampling (Kelemen et al. 2002, 4.1); Z is then the bootstrap's alone");
   command
       ->add_option("--mutation-mix", o->mutationMix,
                    "mlt: relative weights of Veach's mutations, normalized over those that apply "
@@ -242,6 +247,7 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
     }
   }
   s->largeStepProbability = o.largeStep;
+  s->combineLargeSteps = o.combineLargeSteps;
   s->erptChains = o.erptChains;
   s->erptLength = o.erptLength;
   s->mediumSamples = o.mediumSamples;

@@ -272,6 +272,7 @@ bool writeReportDir(const std::string& dir, const JobProgress& p, const std::str
       {"flush_interval", p.settings.flushInterval},
       {"num_chains", p.settings.numChains},
       {"large_step_probability", p.settings.largeStepProbability},
+      {"combine_large_steps", p.settings.combineLargeSteps},
       {"until_error", p.settings.untilError},
       {"mutation_mix", formatMutationMix(p.settings.mutationMix)},
   };

@@ -89,6 +89,7 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_error_groups(settings.errorGroups);
   m.set_auto_algorithm(settings.autoAlgorithm);
   m.set_pilot(settings.pilot);
+  m.set_combine_large_steps(settings.combineLargeSteps);
   m.set_ignore_plan(settings.ignorePlan);
   m.set_shading_normals(
       settings.shadingNormals == ShadingNormals::Strict ? v1::SHADING_NORMALS_STRICT
@@ -120,6 +121,7 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.errorGroups = m.error_groups();
   s.autoAlgorithm = m.auto_algorithm();
   s.pilot = m.pilot();
+  s.combineLargeSteps = m.combine_large_steps();
   s.ignorePlan = m.ignore_plan();
   switch (m.shading_normals()) {
     case v1::SHADING_NORMALS_SCENE:
@@ -169,6 +171,7 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_error_group(spec.errorGroup);
   m.set_seen_emission_every(spec.seenEmissionEvery);
   m.set_seen_emission_scale(spec.seenEmissionScale);
+  m.set_large_step_mis(spec.largeStepMis);
   return m;
 }
 
@@ -202,6 +205,12 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   s.errorGroup = m.error_group();
   s.seenEmissionEvery = m.seen_emission_every();
   s.seenEmissionScale = m.seen_emission_scale();
+  s.largeStepMis = m.large_step_mis();
+  if (!std::isfinite(s.largeStepMis) || s.largeStepMis < 0) {
+    *error = "chain " + std::to_string(s.chainIndex) + " has a bad large-step weight " +
+             std::to_string(s.largeStepMis) + " (must be finite and >= 0)";
+    return false;
+  }
   if (s.seenEmissionEvery < 0 || !std::isfinite(s.seenEmissionScale) || s.seenEmissionScale < 0) {
     *error = "chain " + std::to_string(s.chainIndex) + " has a bad seen-emission sampling (every " +
              std::to_string(s.seenEmissionEvery) + ", scale " +

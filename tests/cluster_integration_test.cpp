@@ -401,28 +401,32 @@ TEST(FarmRender, MaxDepthOption) {
 
 INSTANTIATE_TEST_SUITE_P(
     Algorithms, ClusterTest,
-    ::testing::Values(ClusterCase{"pt", {"--spp", "64"}}, ClusterCase{"bdpt", {"--spp", "16"}},
-                      ClusterCase{"pssmlt", {"--mpp", "32"}},
-                      ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
-                      ClusterCase{"mmlt", {"--mpp", "32"}}, ClusterCase{"mlt", {"--mpp", "32"}},
-                      ClusterCase{"erpt", {"--spp", "4"}},
-                      // pbrt-v3, PLY meshes and PNG textures (with a space
-                      // in a file name) through the bundle upload
-                      ClusterCase{"pssmlt",
-                                  {"--mpp", "8"},
-                                  std::string(FARM_SHARED_DIR) + "/scenes/veach-ajar/scene.pbrt",
-                                  "pssmlt_veach_ajar_pbrt"},
-                      // a shading-normal convention other than the scene file's: the workers
-                      // must load the scene with it, as the embedded render does
-                      ClusterCase{"pt",
-                                  {"--spp", "8", "--shading-normals", "lax"},
-                                  std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml",
-                                  "pt_water_caustic_lax"},
-                      // participating media, the smoke's grid file through the bundle upload
-                      ClusterCase{"bdpt",
-                                  {"--spp", "4"},
-                                  std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml",
-                                  "bdpt_smoky_box_media"}),
+    ::testing::Values(
+        ClusterCase{"pt", {"--spp", "64"}}, ClusterCase{"bdpt", {"--spp", "16"}},
+        ClusterCase{"pssmlt", {"--mpp", "32"}}, ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
+        ClusterCase{"mmlt", {"--mpp", "32"}}, ClusterCase{"mlt", {"--mpp", "32"}},
+        // Kelemen's combination of the large steps: a setting and a weight per
+        // chain, both of which must reach the workers
+        ClusterCase{
+            "mmlt", {"--mpp", "32", "--combine-large-steps"}, kScene, "mmlt_combined_large_steps"},
+        ClusterCase{"erpt", {"--spp", "4"}},
+        // pbrt-v3, PLY meshes and PNG textures (with a space
+        // in a file name) through the bundle upload
+        ClusterCase{"pssmlt",
+                    {"--mpp", "8"},
+                    std::string(FARM_SHARED_DIR) + "/scenes/veach-ajar/scene.pbrt",
+                    "pssmlt_veach_ajar_pbrt"},
+        // a shading-normal convention other than the scene file's: the workers
+        // must load the scene with it, as the embedded render does
+        ClusterCase{"pt",
+                    {"--spp", "8", "--shading-normals", "lax"},
+                    std::string(FARM_SHARED_DIR) + "/scenes/water-caustic/scene.xml",
+                    "pt_water_caustic_lax"},
+        // participating media, the smoke's grid file through the bundle upload
+        ClusterCase{"bdpt",
+                    {"--spp", "4"},
+                    std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml",
+                    "bdpt_smoky_box_media"}),
     [](const auto& info) {
       std::string name = info.param.name.empty() ? info.param.algorithm : info.param.name;
       std::replace(name.begin(), name.end(), '-', '_');

@@ -144,10 +144,12 @@ class FarmClient:
 
     def submit(self, scene_file, algorithm=AUTO, width=0, height=0, spp=16, mpp=16,
                seed=1, time=0.0, chains=0, large_step=0.3, name=None, reference=None,
-               pilot=False):
+               pilot=False, combine_large_steps=False):
         """Uploads what the coordinator lacks of the scene's folder and starts a job; returns
         its id. algorithm "auto" lets the coordinator's plan choose (with pilot=True, a pilot of
-        its candidates). Settings the arguments do not name keep the coordinator's defaults."""
+        its candidates). combine_large_steps weights pssmlt's, pssmlt-pt's and mmlt's large steps
+        into the chain (Kelemen et al. 2002, 4.1). Settings the arguments do not name keep the
+        coordinator's defaults."""
         automatic = algorithm == AUTO
         if not automatic and algorithm not in ALGORITHMS:
             raise ValueError(f"unknown algorithm '{algorithm}' "
@@ -161,7 +163,7 @@ class FarmClient:
             algorithm=ALGORITHMS.get(algorithm, farm_pb2.PSSMLT), auto_algorithm=automatic,
             pilot=pilot, width=width, height=height, samples_per_pixel=spp,
             mutations_per_pixel=mpp, seed=seed, time_budget_seconds=time, num_chains=chains,
-            large_step_probability=large_step)
+            large_step_probability=large_step, combine_large_steps=combine_large_steps)
         header = farm_pb2.JobHeader(
             settings=settings, manifest=farm_pb2.BundleManifest(files=entries),
             scene_path=scene_path, name=name or os.path.basename(scene_file))

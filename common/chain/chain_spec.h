@@ -19,6 +19,11 @@ struct ChainSpec {
   uint64_t seed = 1;  // job seed; the chain's RNG stream is derived from (seed, index)
   int maxDepth = -1;  // longest path in edges (resolved; -1 unbounded)
   float largeStepProbability = 0.3f;
+  // pssmlt, pssmlt-pt and mmlt: b * p_large of Kelemen et al. 2002's combination of the chain
+  // with its own large steps by multiple importance sampling (section 4.1, the weights
+  // 1 / (I / b + p_large)), with b the bootstrap's Z; 0: the chain alone (expected-value
+  // splatting, each path weighted 1 / I). See runPssmltChain.
+  double largeStepMis = 0;
   // pt/bdpt: global index of the first sample (the chain covers [firstSample, firstSample+budget))
   int64_t firstSample = 0;
   // The seed: a primary-sample vector (pssmlt, pssmlt-pt, mmlt) or a serialized path (mlt),

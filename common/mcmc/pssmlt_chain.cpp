@@ -72,6 +72,12 @@ void runPssmltChain(const Scene& scene, const PrimarySampleIntegrand& integrand,
                              ": the seed path carries no light on this host");
   }
 
+  // Kelemen's combination of the large steps with the chain (ChainSpec::largeStepMis). Its
+  // large steps then are part of the image, not samples of Z: the image's scale is the
+  // bootstrap's Z, which the weights' b must equal, so they are not reported for pooling.
+  const double mis = spec.largeStepMis;
+  const bool combined = mis > 0;
+
   ChainFlusher flusher(spec, scene, onFlush, cancel);
   SplatBuffer& film = flusher.film();
   flusher.reject(rejected);
@@ -81,14 +87,20 @@ void runPssmltChain(const Scene& scene, const PrimarySampleIntegrand& integrand,
     double proposedI = evaluateContribution(integrand, sampler, &proposed, &dropped);
     flusher.reject(dropped);
     const bool largeStep = sampler.isLargeStep();
-    if (largeStep) flusher.largeStep(proposedI);
+    if (largeStep && !combined) flusher.largeStep(proposedI);
     const double a = metropolisAcceptance(proposedI, currentI);
-    if (a > 0) {
-      float w = float(a / proposedI);
+    // Kelemen et al. 2002, section 4.1: a path is sampled by the chain (density I / b) and,
+    // with probability p_large, by the large step (density 1), so its balance-heuristic
+    // estimate is f / (I / b + p_large), that is b f / (I + b p_large): the current path keeps
+    // (1 - a), the proposal gets a, and a large step's proposal one more as an independent
+    // sample. With mis = b p_large = 0 this is expected-value splatting, f / I.
+    const double proposedShare = a + (largeStep && combined ? 1.0 : 0.0);
+    if (proposedShare > 0 && proposedI > 0) {
+      float w = float(proposedShare / (proposedI + mis));
       for (const Splat& s : proposed) film.add(s.film, s.value, w);
     }
     if (a < 1) {
-      float w = float((1 - a) / currentI);
+      float w = float((1 - a) / (currentI + mis));
       for (const Splat& s : current) film.add(s.film, s.value, w);
     }
     if (a >= 1 || sampler.rng().nextDouble() < a) {

@@ -4,7 +4,9 @@
 // strategies for mmlt), with expected-value splatting: each iteration splats the proposal with
 // weight a / I(proposal) and the current state with (1 - a) / I(current), so the film holds
 // sum of f / I and the image is Z / M times it (Veach 1997, eq. 11.7 with the normalization of
-// the bootstrap, common/mcmc/normalization.h).
+// the bootstrap, common/mcmc/normalization.h). With ChainSpec::largeStepMis, Kelemen's
+// combination of the large steps with the chain: f / (I + b p_large) a path, the large steps'
+// proposals counted once more (Kelemen et al. 2002, section 4.1).
 #include <atomic>
 #include <cstdint>
 #include <functional>

@@ -57,6 +57,14 @@ class TestIntegrand final : public PrimarySampleIntegrand {
   uint64_t rays() const override { return 0; }
 };
 
+// The film the low-dimensional target splats into: kGrid x kGrid pixels, one bin each.
+Scene gridScene() {
+  SceneDescription desc;
+  desc.camera.width = desc.camera.height = kGrid;
+  desc.camera.filter = FilterType::Box;
+  return Scene(desc);
+}
+
 int binOf(double u0, double u1) {
   int x = std::min(int(u0 * kGrid), kGrid - 1), y = std::min(int(u1 * kGrid), kGrid - 1);
   return x + kGrid * y;
@@ -93,19 +101,21 @@ struct ChainOutcome {
   std::vector<float> finalState;     // camera-stream coordinates 0 and 1 after the last mutation
   std::vector<double> splatShare;    // per bin (pixel): its luminance over the chain's
   std::vector<double> channelShare;  // per pixel and channel (3 a pixel): over the same total
+  std::vector<double> perMutation;   // per pixel: its luminance over the mutations run
 };
 
 // Runs `chains` production chains over `integrand`, each from its own seed, and collects their
 // final states and splatted shares per pixel.
 std::vector<ChainOutcome> runChains(const Scene& scene, const PrimarySampleIntegrand& integrand,
                                     const std::vector<std::vector<float>>& seeds, int64_t mutations,
-                                    float largeStep) {
+                                    float largeStep, double largeStepMis = 0) {
   std::vector<ChainOutcome> out(seeds.size());
   tbb::parallel_for(size_t(0), seeds.size(), [&](size_t c) {
     ChainSpec spec;
     spec.chainIndex = uint32_t(c);
     spec.seed = 12345;
     spec.largeStepProbability = largeStep;
+    spec.largeStepMis = largeStepMis;
     spec.budget = mutations;
     spec.flushInterval = mutations;
     spec.seedSample = seeds[c];
@@ -125,6 +135,8 @@ std::vector<ChainOutcome> runChains(const Scene& scene, const PrimarySampleInteg
     decoded.setFrozen(true);
     decoded.startPath();
     out[c].finalState = {decoded.next(kCameraStream), decoded.next(kCameraStream)};
+    out[c].perMutation = film;
+    for (double& v : out[c].perMutation) v /= double(mutations);
     double total = 0;
     for (double v : film) total += v;
     for (double& v : film) v /= total;
@@ -136,10 +148,7 @@ std::vector<ChainOutcome> runChains(const Scene& scene, const PrimarySampleInteg
 }
 
 TEST(PssmltExactness, LowDimensionalTarget) {
-  SceneDescription desc;
-  desc.camera.width = desc.camera.height = kGrid;
-  desc.camera.filter = FilterType::Box;
-  Scene scene(desc);
+  const Scene scene = gridScene();
   TestIntegrand integrand;
   const std::vector<double> p = binProbabilities(targetDensity);
 
@@ -164,6 +173,71 @@ TEST(PssmltExactness, LowDimensionalTarget) {
                             << t.threshold << ")";
     std::printf("large step %.2f: chi-square %.1f (bound %.1f), worst share %.2f se (bound %.2f)\n",
                 largeStep, x2, x2Max, t.maxAbsZ, t.threshold);
+  }
+}
+
+// Kelemen's combination of the large steps with the chain (ChainSpec::largeStepMis): the film
+// no longer holds a fixed luminance per mutation, so the image's level, not only its shape, is
+// what the weights decide. The image is b / mutations times the film (b f / (I + b p_large) a
+// path), so with b the exact Z each chain's film per mutation estimates the target's bins over
+// Z, p, pixel by pixel, and in total 1. The same chains with the weights'
+// b off by 10% either way (the image still scaled by the exact Z) must be caught: they move
+// the large steps' share of the image by 9-10%.
+struct CombinedOutcome {
+  ShareTest bins;
+  double totalZ = 0;  // (mean total - 1) / its standard error
+};
+
+CombinedOutcome combinedChains(double bScale) {
+  const Scene scene = gridScene();
+  TestIntegrand integrand;
+  const std::vector<double> p = binProbabilities(targetDensity);
+  const int n = 1024;  // Z, the target's mean, by the midpoint rule of binProbabilities
+  double Z = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) Z += targetDensity((i + 0.5) / n, (j + 0.5) / n);
+  Z /= double(n) * n;
+
+  const int chains = 4000;
+  const float largeStep = 0.3f;
+  Rng seedRng(77, 3);
+  std::vector<std::vector<float>> seeds;
+  for (int c = 0; c < chains; ++c) seeds.push_back(exactSeed(seedRng));
+  std::vector<ChainOutcome> outcomes =
+      runChains(scene, integrand, seeds, 400, largeStep, bScale * Z * largeStep);
+  CombinedOutcome out;
+  std::vector<std::vector<double>> images;
+  double sum = 0, sumSq = 0;
+  for (const ChainOutcome& o : outcomes) {
+    std::vector<double> image = o.perMutation;  // the image over b, which is Z: p
+    double total = 0;
+    for (double v : image) total += v;
+    sum += total;
+    sumSq += total * total;
+    images.push_back(std::move(image));
+  }
+  out.bins = testShares(images, p, kAlpha);
+  const double mean = sum / chains;
+  const double se = std::sqrt((sumSq / chains - mean * mean) / (chains - 1));
+  out.totalZ = (mean - 1) / se;
+  return out;
+}
+
+TEST(PssmltExactness, LargeStepsCombinedWithTheChain) {
+  const double bound = normalQuantile(1 - kAlpha / 2);
+  CombinedOutcome right = combinedChains(1.0);
+  EXPECT_TRUE(right.bins.passed()) << "bin " << right.bins.worstBin << " is " << right.bins.maxAbsZ
+                                   << " standard errors off (bound " << right.bins.threshold << ")";
+  EXPECT_LE(std::abs(right.totalZ), bound) << "the image's total";
+  std::printf("combined, b = Z: worst bin %.2f se (bound %.2f), total %.2f se (bound %.2f)\n",
+              right.bins.maxAbsZ, right.bins.threshold, right.totalZ, bound);
+  for (double wrong : {1.1, 1 / 1.1}) {
+    CombinedOutcome o = combinedChains(wrong);
+    EXPECT_TRUE(!o.bins.passed() || std::abs(o.totalZ) > bound)
+        << "b = " << wrong << " Z went unseen: worst bin " << o.bins.maxAbsZ << " se, total "
+        << o.totalZ << " se";
+    std::printf("combined, b = %.3f Z: worst bin %.2f se, total %.2f se\n", wrong, o.bins.maxAbsZ,
+                o.totalZ);
   }
 }
 

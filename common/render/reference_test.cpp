@@ -37,6 +37,7 @@ struct Case {
   int64_t perPixel;  // spp or mpp for each of the two renders
   std::string file = "scene.xml";
   int maxDepth = 0;  // 0: the scene's
+  bool combineLargeSteps = false;
 };
 
 void expectAgreement(const Case& c) {
@@ -57,6 +58,7 @@ void expectAgreement(const Case& c) {
     s.samplesPerPixel = s.mutationsPerPixel = c.perPixel;
     s.seed = 1000 + k;
     s.maxDepth = c.maxDepth;
+    s.combineLargeSteps = c.combineLargeSteps;
     auto scene = loadScene(kShared + "/scenes/" + c.scene + "/" + c.file, s);
     RenderJob job(scene, s, "reference");
     r[k] = renderLocally(job);
@@ -147,6 +149,12 @@ TEST(Reference, CornellBoxPssmltOverPathTracing) {
 TEST(Reference, CornellBoxMultiplexed) {
   expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::MMLT, 16});
 }
+// Kelemen's combination of the large steps with the chain moves the image's level with its
+// weights, not only its shape (PssmltExactness.LargeStepsCombinedWithTheChain).
+TEST(Reference, CornellBoxMultiplexedCombined) {
+  expectAgreement(
+      {"cornell-box", "cornell-box-256.exr", Algorithm::MMLT, 16, "scene.xml", 0, true});
+}
 TEST(Reference, CornellBoxPathSpace) {
   expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::MLT, 16});
 }
@@ -182,6 +190,9 @@ TEST(Reference, VeachMisBidirectional) {
 }
 TEST(Reference, VeachMisPssmlt) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PSSMLT, 8});
+}
+TEST(Reference, VeachMisPssmltCombined) {
+  expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PSSMLT, 8, "scene.xml", 0, true});
 }
 TEST(Reference, VeachMisPssmltOverPathTracing) {
   expectAgreement({"veach-mis", "veach-mis-320.exr", Algorithm::PSSMLTOverPT, 16});

@@ -259,6 +259,12 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
         }
       } else {
         s.seedSample = bootstrap.seedSamples[c];
+        // Kelemen's b is the bootstrap's Z: the weights need a constant fixed before the chain
+        // runs, and the image's scale (imageScale) is then that same Z, as the chains report
+        // no large steps to pool into it (runPssmltChain).
+        if (settings_.combineLargeSteps) {
+          s.largeStepMis = bootstrap.normalization * double(settings_.largeStepProbability);
+        }
       }
       s.seedContribution = bootstrap.seedContributions[c];
     }
@@ -390,6 +396,7 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
       m["farm:mutationMix"] = formatMutationMix(settings_.mutationMix);
     } else {
       m["farm:largeStepProbability"] = formatDouble(settings_.largeStepProbability);
+      if (settings_.combineLargeSteps) m["farm:combineLargeSteps"] = "1";
     }
   } else {
     m["farm:samples"] = std::to_string(workDone);

@@ -73,6 +73,10 @@ std::string RenderSettings::validate() const {
     err << "--algorithm auto is the plan's choice: it cannot go with --no-plan";
   } else if (pilot && !autoAlgorithm) {
     err << "--pilot ranks auto's candidates: it needs --algorithm auto";
+  } else if (combineLargeSteps && !autoAlgorithm && !isPrimarySampleSpace(algorithm)) {
+    err << "--combine-large-steps weights large steps into a chain: pssmlt, pssmlt-pt or mmlt, "
+           "not "
+        << algorithmName(algorithm);
   } else if (errorGroups == 1 && untilError > 0) {
     err << "--until-error needs an error estimate, which --error-groups 1 turns off";
   }

@@ -37,7 +37,11 @@ struct RenderSettings {
   int64_t bootstrapSamples = 0;       // candidate paths; 0: sized to the job (bootstrap_size.h)
   int numChains = 0;                  // independent chains (work units); 0: default
   float largeStepProbability = 0.3f;  // Kelemen et al. 2002, section 4
-  MutationMix mutationMix;            // mlt: how often each of Veach's mutations is proposed
+  // --combine-large-steps (pssmlt, pssmlt-pt, mmlt): each large step's proposal also counts as
+  // an independent sample, weighted against the chain by multiple importance sampling (Kelemen
+  // et al. 2002, section 4.1; ChainSpec::largeStepMis). Z is then the bootstrap's alone.
+  bool combineLargeSteps = false;
+  MutationMix mutationMix;  // mlt: how often each of Veach's mutations is proposed
   // erpt (Cline et al. 2005): seeds per pixel are samplesPerPixel; each seed starts on average
   // erptChains chains of erptLength mutations.
   double erptChains = 1;
