@@ -21,53 +21,6 @@ namespace {
 constexpr auto kUnaryDeadline = std::chrono::seconds(15);
 constexpr auto kTransferDeadline = std::chrono::minutes(30);
 
-void fromProto(const v1::JobProgress& m, JobProgress* p) {
-  p->jobId = m.job_id();
-  p->name = m.name();
-  p->error = m.error();
-  p->phase = farm::fromProto(m.phase());
-  p->fraction = m.fraction();
-  p->samplesPerSecond = m.samples_per_second();
-  p->elapsedSeconds = m.elapsed_seconds();
-  p->etaSeconds = m.eta_seconds();
-  p->workDone = m.work_done();
-  p->plannedWork = m.planned_work();
-  p->rejected.nan = m.rejected_nan();
-  p->rejected.infinite = m.rejected_infinite();
-  p->rejected.negative = m.rejected_negative();
-  p->tallies.clear();  // *p may hold an earlier answer (status asks twice)
-  for (const v1::MutationTally& t : m.tallies())
-    p->tallies.push_back({t.name(), t.proposed(), t.accepted()});
-  p->warnings.assign(m.warnings().begin(), m.warnings().end());
-  p->renderPlan.assign(m.render_plan().begin(), m.render_plan().end());
-  p->setAside.assign(m.set_aside().begin(), m.set_aside().end());
-  p->rays = m.rays();
-  p->raysPerSecond = m.rays_per_second();
-  p->normalization = m.normalization();
-  p->normalizationStdError = m.normalization_std_error();
-  p->loadSeconds = m.load_seconds();
-  p->bootstrapSeconds = m.bootstrap_seconds();
-  p->bootstrapCandidates = m.bootstrap_candidates();
-  p->largeSteps = m.large_steps();
-  p->abandonedConnections = m.abandoned_connections();
-  p->renderSeconds = m.render_seconds();
-  p->chainsTotal = m.chains_total();
-  p->chainsFinished = m.chains_finished();
-  p->chainsLeased = m.chains_leased();
-  p->activeWorkers = m.active_workers();
-  p->hasReference = m.has_reference();
-  p->errorSeries.clear();
-  for (const v1::ErrorSample& e : m.error_series()) {
-    p->errorSeries.push_back(
-        {e.elapsed_seconds(), e.samples(), e.rmse(), e.relmse(), e.estimated_relmse()});
-  }
-  p->errorSeriesTotal = m.error_series_total();
-  p->width = m.width();
-  p->height = m.height();
-  std::string ignored;
-  farm::fromProto(m.settings(), &p->settings, &ignored);
-}
-
 }  // namespace
 
 struct FarmClient::Impl {

@@ -69,59 +69,6 @@ BundleManifest fromProto(const v1::BundleManifest& m) {
   return manifest;
 }
 
-void toProto(const JobProgress& p, v1::JobProgress* m) {
-  m->set_job_id(p.jobId);
-  m->set_phase(toProto(p.phase));
-  m->set_error(p.error);
-  m->set_fraction(p.fraction);
-  m->set_work_done(p.workDone);
-  m->set_planned_work(p.plannedWork);
-  m->set_samples_per_second(p.samplesPerSecond);
-  m->set_elapsed_seconds(p.elapsedSeconds);
-  m->set_eta_seconds(p.etaSeconds);
-  m->set_normalization(p.normalization);
-  m->set_normalization_std_error(p.normalizationStdError);
-  m->set_bootstrap_seconds(p.bootstrapSeconds);
-  m->set_bootstrap_candidates(p.bootstrapCandidates);
-  m->set_large_steps(p.largeSteps);
-  m->set_abandoned_connections(p.abandonedConnections);
-  m->set_chains_total(p.chainsTotal);
-  m->set_chains_finished(p.chainsFinished);
-  m->set_chains_leased(p.chainsLeased);
-  m->set_active_workers(p.activeWorkers);
-  m->set_has_reference(p.hasReference);
-  for (const ErrorSample& e : p.errorSeries) {
-    v1::ErrorSample* s = m->add_error_series();
-    s->set_elapsed_seconds(e.elapsedSeconds);
-    s->set_samples(e.samples);
-    s->set_rmse(e.rmse);
-    s->set_relmse(e.relMse);
-    s->set_estimated_relmse(e.estimatedRelMse);
-  }
-  m->set_error_series_total(p.errorSeriesTotal);
-  m->set_rejected_splats(p.rejected.total());
-  m->set_rejected_nan(p.rejected.nan);
-  m->set_rejected_infinite(p.rejected.infinite);
-  m->set_rejected_negative(p.rejected.negative);
-  for (const MutationTally& t : p.tallies) {
-    v1::MutationTally* tally = m->add_tallies();
-    tally->set_name(t.name);
-    tally->set_proposed(t.proposed);
-    tally->set_accepted(t.accepted);
-  }
-  for (const std::string& w : p.warnings) m->add_warnings(w);
-  for (const std::string& line : p.renderPlan) m->add_render_plan(line);
-  for (const std::string& w : p.setAside) m->add_set_aside(w);
-  m->set_width(p.width);
-  m->set_height(p.height);
-  *m->mutable_settings() = farm::toProto(p.settings);
-  m->set_name(p.name);
-  m->set_render_seconds(p.renderSeconds);
-  m->set_load_seconds(p.loadSeconds);
-  m->set_rays(p.rays);
-  m->set_rays_per_second(p.raysPerSecond);
-}
-
 // Ids are short; a request with a huge or empty one is malformed, not merely unknown.
 grpc::Status checkId(const std::string& id, const char* what) {
   if (id.empty()) return invalid(std::string(what) + " is empty");

@@ -5,6 +5,7 @@
 
 #include "common/chain/chain_spec.h"
 #include "common/render/job_phase.h"
+#include "common/render/job_progress.h"
 #include "common/render/render_settings.h"
 #include "proto/farm.pb.h"
 
@@ -29,5 +30,10 @@ ChainFlush fromProto(const v1::BatchEntry& entry);
 v1::JobPhase toProto(JobPhase phase);
 // PHASE_UNSPECIFIED and values this build does not know read as submitted.
 JobPhase fromProto(v1::JobPhase phase);
+
+// A job's progress, as the coordinator answers status polls and a client reads them. A client
+// reads settings it cannot convert (from a newer coordinator) as the defaults.
+void toProto(const JobProgress& progress, v1::JobProgress* out);
+void fromProto(const v1::JobProgress& message, JobProgress* out);
 
 }  // namespace farm

@@ -1,7 +1,7 @@
 // proto/convert.h: the job phase, the one enum the coordinator, the store and the clients all
 // report, crosses the wire and comes back as itself (what a newer or broken peer sends that this
-// build does not know reads as submitted); so do the settings and work units of Kelemen's
-// combined large steps.
+// build does not know reads as submitted); so do a job's progress, field by field, and the
+// settings and work units of Kelemen's combined large steps.
 #include "proto/convert.h"
 
 #include <gtest/gtest.h>
@@ -25,6 +25,68 @@ TEST(Convert, EveryJobPhaseCrossesTheWireAndBack) {
   }
   EXPECT_EQ(fromProto(v1::PHASE_UNSPECIFIED), JobPhase::kSubmitted);
   EXPECT_EQ(fromProto(static_cast<v1::JobPhase>(99)), JobPhase::kSubmitted);
+}
+
+// Every field of a job's progress reaches the wire (a field the message has but toProto leaves
+// at its default fails here) and comes back (one fromProto drops changes the second message).
+TEST(Convert, EveryFieldOfAJobsProgressCrossesTheWireAndBack) {
+  JobProgress p;
+  p.jobId = "job-1";
+  p.name = "box";
+  p.error = "none yet";
+  p.phase = JobPhase::kRendering;
+  p.fraction = 0.25;
+  p.samplesPerSecond = 1e6;
+  p.elapsedSeconds = 3;
+  p.etaSeconds = 9;
+  p.workDone = 100;
+  p.plannedWork = 400;
+  p.rejected.nan = 1;
+  p.rejected.infinite = 2;
+  p.rejected.negative = 3;
+  p.rays = 5000;
+  p.tallies = {{"large step", 10, 4}};
+  p.warnings = {"left out a triangle"};
+  p.renderPlan = {"pt: no caustics"};
+  p.setAside = {"worker-2: bad flushes"};
+  p.raysPerSecond = 2e6;
+  p.normalization = 0.5;
+  p.normalizationStdError = 0.01;
+  p.bootstrapCandidates = 4096;
+  p.largeSteps = 30;
+  p.abandonedConnections = 2;
+  p.loadSeconds = 0.1;
+  p.bootstrapSeconds = 0.2;
+  p.renderSeconds = 2.5;
+  p.chainsTotal = 64;
+  p.chainsFinished = 8;
+  p.chainsLeased = 4;
+  p.activeWorkers = 2;
+  p.hasReference = true;
+  p.errorSeries = {{1.5, 50, 0.1, 0.01, 0.02}};
+  p.errorSeriesTotal = 7;
+  p.width = 32;
+  p.height = 24;
+  p.settings.algorithm = Algorithm::MMLT;
+
+  v1::JobProgress m;
+  toProto(p, &m);
+  const google::protobuf::Reflection* reflection = m.GetReflection();
+  const google::protobuf::Descriptor* descriptor = m.GetDescriptor();
+  for (int i = 0; i < descriptor->field_count(); ++i) {
+    const google::protobuf::FieldDescriptor* field = descriptor->field(i);
+    const bool set =
+        field->is_repeated() ? reflection->FieldSize(m, field) > 0 : reflection->HasField(m, field);
+    EXPECT_TRUE(set) << field->name() << " is left at its default";
+  }
+  JobProgress back;
+  fromProto(m, &back);
+  v1::JobProgress again;
+  toProto(back, &again);
+  EXPECT_EQ(again.SerializeAsString(), m.SerializeAsString())
+      << "was:\n"
+      << m.DebugString() << "came back as:\n"
+      << again.DebugString();
 }
 
 // Kelemen's combination crosses the wire as a setting and as each chain's weight, and a chain
