@@ -42,3 +42,12 @@ def reference_floor(args, s):
     measured error, which is about the sum of the two, independent as they are."""
     with open(os.path.join(os.path.dirname(scene_path(args, s)), "reference.json")) as f:
         return json.load(f)["reference_relmse"]
+
+
+def write_table(args, name, lines):
+    """Writes the table's lines to OUT/name and prints them."""
+    table = "\n".join(lines) + "\n"
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, name), "w") as f:
+        f.write(table)
+    print(table)

@@ -18,7 +18,8 @@ import math
 import os
 import subprocess
 
-from corpus_common import add_corpus_arguments, corpus_scenes, reference_path, scene_path
+from corpus_common import (add_corpus_arguments, corpus_scenes, reference_path, scene_path,
+                           write_table)
 
 
 def main():
@@ -64,11 +65,7 @@ def main():
             lines.append("%s: estimate / measured, geometric mean %.2f, range %.2g-%.2g" % (
                 a, math.exp(sum(math.log(x) for x in every[a]) / len(every[a])),
                 min(every[a]), max(every[a])))
-    table = "\n".join(lines) + "\n"
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, "estimates.md"), "w") as f:
-        f.write(table)
-    print(table)
+    write_table(args, "estimates.md", lines)
 
 
 if __name__ == "__main__":

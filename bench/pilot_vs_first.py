@@ -17,7 +17,7 @@ import os
 import subprocess
 
 from corpus_common import (add_corpus_arguments, corpus_scenes, reference_floor, reference_path,
-                           scene_path)
+                           scene_path, write_table)
 
 
 def main():
@@ -70,10 +70,7 @@ def main():
         lines.append("geometric mean of pilot / first: %.2f over %d scenes, the pilot worse on %d" %
                      (math.exp(sum(map(math.log, ratios)) / len(ratios)), len(ratios),
                       sum(r > 1 for r in ratios)))
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, "pilot_vs_first.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_table(args, "pilot_vs_first.md", lines)
 
 
 if __name__ == "__main__":
