@@ -145,6 +145,9 @@ Status runCompare(const CompareOptions& o, CompareResult* result) {
     settings.algorithm = choice.algorithm;
     settings.autoAlgorithm = choice.automatic;
     settings.pilot = choice.automatic && o.settings.pilot;  // --pilot is auto's alone
+    // --combine-large-steps is for the chains that have large steps (and auto, which may pick one)
+    settings.combineLargeSteps = o.settings.combineLargeSteps &&
+                                 (choice.automatic || isPrimarySampleSpace(choice.algorithm));
     JobProgress progress;
     Image image;
     ImageMetadata metadata;

@@ -65,10 +65,11 @@ void expectReport(const std::string& dir, const std::vector<std::string>& algori
 TEST(FarmCompare, RendersEachAlgorithmAndWritesTheReport) {
   ScratchDir scratch("compare");
   const std::string dir = scratch / "report";
-  CommandResult r = runCommand(
-      {FARM_CLI_BIN, "compare", kScene, "--algorithms", "pt,bdpt,pssmlt,auto", "--pilot", "--width",
-       "48", "--height", "48", "--spp", "8", "--mpp", "8", "--threads", "2", "--report", dir},
-      seconds(180), scratch.path());
+  CommandResult r =
+      runCommand({FARM_CLI_BIN, "compare", kScene, "--algorithms", "pt,bdpt,pssmlt,auto", "--pilot",
+                  "--combine-large-steps", "--width", "48", "--height", "48", "--spp", "8", "--mpp",
+                  "8", "--threads", "2", "--report", dir},
+                 seconds(180), scratch.path());
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_EQ(r.err.find("no chart"), std::string::npos) << r.err;
   expectReport(dir, {"pt", "bdpt", "pssmlt", "auto"});
@@ -80,6 +81,12 @@ TEST(FarmCompare, RendersEachAlgorithmAndWritesTheReport) {
   EXPECT_NE(html.find("pilot pt: "), std::string::npos);
   const nlohmann::json report = nlohmann::json::parse(readFile(dir + "/auto/report.json"));
   EXPECT_FALSE(report["render_plan"].empty());
+  // --combine-large-steps goes to the chains with large steps (and auto) alone.
+  for (const char* a : {"pt", "bdpt", "pssmlt"}) {
+    const nlohmann::json j =
+        nlohmann::json::parse(readFile(dir + "/" + std::string(a) + "/report.json"));
+    EXPECT_EQ(j["settings"]["combine_large_steps"], std::string(a) == "pssmlt") << a;
+  }
 
   // What it refuses, before rendering anything.
   CommandResult bad = runCommand(
