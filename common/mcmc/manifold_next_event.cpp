@@ -25,11 +25,10 @@ constexpr float kLocalShare = 0.9f;
 // from `from`: the Fresnel reflectance, kept within [0.1, 0.9] so that neither lobe is starved,
 // except where only one exists (a conductor; total internal reflection).
 float reflectionProbability(const Scene& scene, const PathVertex& v, const Vec3f& from) {
-  const BsdfDescription& desc = scene.bsdfOf(v.shape).description();
-  if (desc.type != BsdfDescription::Type::Dielectric) return 1;
+  float intIOR, extIOR;
+  if (!scene.bsdfOf(v.shape).smoothDielectricIndices(&intIOR, &extIOR)) return 1;
   float cosT;
-  const float f =
-      fresnelDielectric(dot(normalize(from - v.p), v.ns), desc.intIOR / desc.extIOR, &cosT);
+  const float f = fresnelDielectric(dot(normalize(from - v.p), v.ns), intIOR / extIOR, &cosT);
   return f >= 1 ? 1.0f : std::min(0.9f, std::max(0.1f, f));
 }
 

@@ -33,21 +33,27 @@ Bsdf::Model Bsdf::makeModel(const BsdfDescription& desc) {
   throw std::invalid_argument("unknown BSDF type");
 }
 
-Bsdf::Bsdf(const BsdfDescription& desc) : desc_(desc), model_(makeModel(desc)) {
+Bsdf::Bsdf(const BsdfDescription& desc)
+    : twoSided_(desc.twoSided),
+      reflectanceTexture_(desc.reflectanceTexture),
+      reflectance_(desc.reflectance),
+      model_(makeModel(desc)) {
   if (desc.twoSided && (desc.type == BsdfDescription::Type::Dielectric ||
                         desc.type == BsdfDescription::Type::RoughDielectric))
     throw std::invalid_argument("a dielectric cannot be two-sided: its sides differ by nature");
-  // Scene::bsdfAt copies a Bsdf for every shading point of a textured material; without the
-  // name, that copy never allocates, and without the shared coating (the model holds it) it
-  // touches no shared count.
-  desc_.id.clear();
-  desc_.id.shrink_to_fit();
-  desc_.coating.reset();
 }
 
 void Bsdf::setReflectance(const Spectrum& reflectance) {
-  desc_.reflectance = reflectance;
+  reflectance_ = reflectance;
   std::visit([&](auto& model) { model.setReflectance(reflectance); }, model_);
+}
+
+bool Bsdf::smoothDielectricIndices(float* intIOR, float* extIOR) const {
+  const SmoothDielectricBsdf* glass = std::get_if<SmoothDielectricBsdf>(&model_);
+  if (!glass) return false;
+  *intIOR = glass->intIOR();
+  *extIOR = glass->extIOR();
+  return true;
 }
 
 bool Bsdf::isBlack() const {

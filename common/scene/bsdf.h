@@ -53,9 +53,14 @@ class Bsdf {
   // BSDF without Dirac lobes.
   float diracJacobian(const Vec3f& a, const Vec3f& b) const;
   bool isBlack() const;  // reflects nothing at all (e.g. the black diffuse of a light)
-  // The description, less its id and its coating (the model holds that).
-  const BsdfDescription& description() const { return desc_; }
-  // The diffuse reflectance at one shading point, where a texture gives it (Scene::bsdfAt).
+  // The smooth dielectric's indices of refraction inside and outside (the manifold walks and
+  // manifold next-event estimation need them, not the lobes); false for every other model.
+  bool smoothDielectricIndices(float* intIOR, float* extIOR) const;
+  // The texture that gives the diffuse reflectance per shading point (an index into the scene
+  // description's textures), or -1; and that reflectance, as the description gave it or as
+  // setReflectance (Scene::bsdfAt) last set it.
+  int reflectanceTexture() const { return reflectanceTexture_; }
+  const Spectrum& reflectance() const { return reflectance_; }
   void setReflectance(const Spectrum& reflectance);
 
  private:
@@ -64,9 +69,14 @@ class Bsdf {
                    RoughDielectricBsdf, PlasticBsdf, CoatedDiffuseBsdf>;
   static Model makeModel(const BsdfDescription& desc);
   // Mitsuba's twosided: the back side behaves as the front.
-  bool mirrored(const Vec3f& wo) const { return desc_.twoSided && wo.z < 0; }
+  bool mirrored(const Vec3f& wo) const { return twoSided_ && wo.z < 0; }
 
-  BsdfDescription desc_;
+  // What the model does not hold of the description: Scene::bsdfAt copies a Bsdf for every
+  // shading point of a textured material, so it keeps these few fields rather than the whole
+  // description (a string and a shared coating among them).
+  bool twoSided_;
+  int reflectanceTexture_;
+  Spectrum reflectance_;
   Model model_;
 };
 

@@ -59,9 +59,9 @@ struct Albedo {
   double total() const { return reflected + transmitted; }
 };
 
-Albedo quadratureAlbedo(const Bsdf& bsdf, const Vec3f& wo, TransportMode mode, int nTheta,
-                        int nPhi) {
-  const BsdfDescription& desc = bsdf.description();
+Albedo quadratureAlbedo(const BsdfDescription& desc, const Vec3f& wo, TransportMode mode,
+                        int nTheta, int nPhi) {
+  const Bsdf bsdf(desc);
   const double alpha = desc.alpha;
   const bool transmits = desc.type == BsdfDescription::Type::RoughDielectric;
   const double etaI = wo.z > 0 ? desc.extIOR : desc.intIOR;
@@ -149,10 +149,10 @@ void checkSamplingConsistency(const BsdfDescription& desc, float cosThetaO,
       desc.type == BsdfDescription::Type::Plastic ||
       desc.type == BsdfDescription::Type::CoatedDiffuse) {
     Vec3f w = desc.twoSided && wo.z < 0 ? Vec3f(wo.x, wo.y, -wo.z) : wo;  // the back is the front
-    reference.mean = quadratureAlbedo(bsdf, w, mode, 2000, 256).total();
+    reference.mean = quadratureAlbedo(desc, w, mode, 2000, 256).total();
     // The quadrature at half the resolution tells its own error.
     reference.stdError =
-        std::fabs(reference.mean - quadratureAlbedo(bsdf, w, mode, 1000, 128).total());
+        std::fabs(reference.mean - quadratureAlbedo(desc, w, mode, 1000, 128).total());
   } else {
     reference = monteCarlo(n, [&](int) {
       Vec3f wi = squareToUniformSphere({rng.nextFloat(), rng.nextFloat()});
@@ -217,11 +217,11 @@ TEST(Bsdf, PlasticSamplingMatchesEvaluation) {
 // index 1.5 (times Ks), and the sum is both (the mixture adds, nothing couples them).
 TEST(Bsdf, PlasticIsTheSumOfItsLobes) {
   const Vec3f wo(0, 0, 1);
-  const Albedo diffuse = quadratureAlbedo(Bsdf(plastic(0.05f, Spectrum(0.6f), Spectrum(0.0f))), wo,
+  const Albedo diffuse = quadratureAlbedo(plastic(0.05f, Spectrum(0.6f), Spectrum(0.0f)), wo,
                                           TransportMode::Radiance, 2000, 256);
-  const Albedo glossy = quadratureAlbedo(Bsdf(plastic(0.05f, Spectrum(0.0f), Spectrum(1.0f))), wo,
+  const Albedo glossy = quadratureAlbedo(plastic(0.05f, Spectrum(0.0f), Spectrum(1.0f)), wo,
                                          TransportMode::Radiance, 2000, 256);
-  const Albedo both = quadratureAlbedo(Bsdf(plastic(0.05f, Spectrum(0.6f), Spectrum(1.0f))), wo,
+  const Albedo both = quadratureAlbedo(plastic(0.05f, Spectrum(0.6f), Spectrum(1.0f)), wo,
                                        TransportMode::Radiance, 2000, 256);
   EXPECT_NEAR(diffuse.total(), 0.6, 0.003);
   EXPECT_NEAR(glossy.total(), 0.04, 0.003);  // ((1.5 - 1) / (1.5 + 1))^2
@@ -230,7 +230,7 @@ TEST(Bsdf, PlasticIsTheSumOfItsLobes) {
   // shadowing); pbrt-v3's, computed from inside the coating, would reflect totally.
   const float c = 0.2f;
   const Albedo grazing =
-      quadratureAlbedo(Bsdf(plastic(0.05f, Spectrum(0.0f), Spectrum(1.0f))),
+      quadratureAlbedo(plastic(0.05f, Spectrum(0.0f), Spectrum(1.0f)),
                        Vec3f(std::sqrt(1 - c * c), 0, c), TransportMode::Radiance, 2000, 256);
   EXPECT_GT(grazing.total(), 0.15);
   EXPECT_LT(grazing.total(), 0.4);
@@ -275,7 +275,7 @@ TEST(CoatingTransmittance, IsTheRoughDielectricsTransmittedAlbedo) {
        {MicrofacetDistribution::GGX, MicrofacetDistribution::Beckmann})
     for (float alpha : {0.05f, 0.3f, 0.8f}) {
       const CoatingTransmittance coat(dist, alpha, 1.5f);
-      const Bsdf glass(roughGlass(dist, alpha, 1.5f));
+      const BsdfDescription glass = roughGlass(dist, alpha, 1.5f);
       for (float mu : {0.15f, 0.5f, 0.95f}) {
         const Vec3f wo(std::sqrt(1 - mu * mu), 0, mu);
         const double fine =
@@ -339,9 +339,9 @@ TEST(Bsdf, CoatedDiffuseSamplingMatchesEvaluation) {
 TEST(Bsdf, CoatedWhiteDiffuseConservesEnergy) {
   for (float eta : {1.5f, 1.2f})
     for (float alpha : {0.01f, 0.1f}) {
-      const Bsdf white(
-          coated(MicrofacetDistribution::GGX, alpha, Spectrum(1.0f), Spectrum(1.0f), eta));
-      const Bsdf boundary(roughGlass(MicrofacetDistribution::GGX, alpha, eta));
+      const BsdfDescription white =
+          coated(MicrofacetDistribution::GGX, alpha, Spectrum(1.0f), Spectrum(1.0f), eta);
+      const BsdfDescription boundary = roughGlass(MicrofacetDistribution::GGX, alpha, eta);
       for (float mu : {0.95f, 0.6f, 0.3f}) {
         const Vec3f wo(std::sqrt(1 - mu * mu), 0, mu);
         const double albedo =
@@ -355,15 +355,13 @@ TEST(Bsdf, CoatedWhiteDiffuseConservesEnergy) {
   // The nonlinear form darkens: rho / (1 - rho Fdr) < rho / (1 - Fdr) for rho < 1.
   const Vec3f wo(0, 0, 1);
   const double linear =
-      quadratureAlbedo(
-          Bsdf(coated(MicrofacetDistribution::GGX, 0.1f, Spectrum(0.5f), Spectrum(0.0f))), wo,
-          TransportMode::Radiance, 1000, 128)
-          .total();
-  const double nonlinear =
-      quadratureAlbedo(Bsdf(coated(MicrofacetDistribution::GGX, 0.1f, Spectrum(0.5f),
-                                   Spectrum(0.0f), 1.5f, true)),
+      quadratureAlbedo(coated(MicrofacetDistribution::GGX, 0.1f, Spectrum(0.5f), Spectrum(0.0f)),
                        wo, TransportMode::Radiance, 1000, 128)
           .total();
+  const double nonlinear = quadratureAlbedo(coated(MicrofacetDistribution::GGX, 0.1f,
+                                                   Spectrum(0.5f), Spectrum(0.0f), 1.5f, true),
+                                            wo, TransportMode::Radiance, 1000, 128)
+                               .total();
   EXPECT_LT(nonlinear, linear - 0.05);
   EXPECT_THROW(Bsdf([] {
                  BsdfDescription d =
@@ -451,7 +449,7 @@ TEST(Bsdf, RoughAtTheStiffEndIsSmooth) {
       const float u[3] = {0.5f, 0.5f, 0.5f};
       ASSERT_TRUE(Bsdf(smooth).sample(wo, u, TransportMode::Radiance, &s));
       EXPECT_TRUE(s.delta);
-      EXPECT_NEAR(quadratureAlbedo(Bsdf(rough), wo, TransportMode::Radiance, 2000, 256).total(),
+      EXPECT_NEAR(quadratureAlbedo(rough, wo, TransportMode::Radiance, 2000, 256).total(),
                   s.weight.y, 2e-3 * s.weight.y)
           << "conductor, cos " << cosO;
     }
@@ -460,7 +458,7 @@ TEST(Bsdf, RoughAtTheStiffEndIsSmooth) {
       BsdfDescription glass = roughGlass(d, 1e-4f), clear = glass;
       clear.type = BsdfDescription::Type::Dielectric;
       for (TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
-        const Albedo a = quadratureAlbedo(Bsdf(glass), wo, mode, 2000, 256);
+        const Albedo a = quadratureAlbedo(glass, wo, mode, 2000, 256);
         BsdfSample reflected, refracted;
         const float uR[3] = {0.0f, 0.5f, 0.5f}, uT[3] = {0.99999f, 0.5f, 0.5f};
         ASSERT_TRUE(Bsdf(clear).sample(wo, uR, mode, &reflected));

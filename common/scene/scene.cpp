@@ -443,7 +443,7 @@ Vec3f Scene::sampleEmission(int light, Vec2f u) const {
 
 Bsdf Scene::bsdfAt(int shape, const Vec2f& uv) const {
   Bsdf bsdf = bsdfs_[shapeBsdf_[shape]];
-  const int texture = bsdf.description().reflectanceTexture;
+  const int texture = bsdf.reflectanceTexture();
   if (texture >= 0) bsdf.setReflectance(evalTexture(desc_.textures, texture, uv));
   return bsdf;
 }

@@ -95,10 +95,10 @@ bool constraintBlocks(const Scene& scene, const PathVertex& v, const VertexGeome
   double etaI = 1, etaO = 1;
   const double ci = dot(wi, g.n), co = dot(wo, g.n);
   if (ci * co < 0) {
-    const BsdfDescription& desc = scene.bsdfOf(v.shape).description();
-    if (desc.type != BsdfDescription::Type::Dielectric) return false;
-    etaI = ci > 0 ? desc.extIOR : desc.intIOR;
-    etaO = co > 0 ? desc.extIOR : desc.intIOR;
+    float intIOR, extIOR;
+    if (!scene.bsdfOf(v.shape).smoothDielectricIndices(&intIOR, &extIOR)) return false;
+    etaI = ci > 0 ? extIOR : intIOR;
+    etaO = co > 0 ? extIOR : intIOR;
   }
   const V3 h = wi * etaI + wo * etaO;
   const double hn = dot(h, g.n);

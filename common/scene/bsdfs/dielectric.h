@@ -27,6 +27,8 @@ class SmoothDielectricBsdf {
   bool specularLobe(const Vec3f& wo, const Vec3f& wi, TransportMode mode, bool* reflection,
                     float* probability, Spectrum* value) const;
   float diracJacobian(const Vec3f& a, const Vec3f& b) const;
+  float intIOR() const { return intIOR_; }
+  float extIOR() const { return extIOR_; }
 
  private:
   float intIOR_, extIOR_;

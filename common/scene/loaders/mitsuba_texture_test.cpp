@@ -41,7 +41,7 @@ Spectrum reflectanceAt(const Scene& scene, float x, float y) {
   Ray ray{{x, y, 5}, {0, 0, -1}};
   SurfaceHit hit;
   if (!scene.intersect(ray, &hit)) return Spectrum(-1.0f);
-  return scene.bsdfAt(hit.shape, hit.uv).description().reflectance;
+  return scene.bsdfAt(hit.shape, hit.uv).reflectance();
 }
 
 void expectColor(const Spectrum& got, const Spectrum& want, const std::string& where) {

@@ -116,11 +116,10 @@ TEST(PbrtLoader, VeachAjarTextureLookupsFollowThePicture) {
       SurfaceHit hit;
       EXPECT_TRUE(scene.intersect(cam.generateRay({x, y}), &hit));
       const Bsdf bsdf = scene.bsdfAt(hit.shape, hit.uv);
-      EXPECT_EQ(bsdf.description().reflectanceTexture, 0)
-          << "not the picture at " << x << ", " << y;
+      EXPECT_EQ(bsdf.reflectanceTexture(), 0) << "not the picture at " << x << ", " << y;
       // The lookup is the image's bilinear value at the hit's uv.
-      expectNear(bsdf.description().reflectance, evalTexture(desc.textures, 0, hit.uv), 1e-6f);
-      sum += bsdf.description().reflectance;
+      expectNear(bsdf.reflectance(), evalTexture(desc.textures, 0, hit.uv), 1e-6f);
+      sum += bsdf.reflectance();
       *uv = hit.uv;
     }
     return sum / float(n);
@@ -344,16 +343,16 @@ TEST(PbrtLoader, ImageTexturesAndTheirEncodings) {
   SceneDescription s = loadPbrtScene(dir.write("s.pbrt", scene(world)));
   Scene sc(s);
   // The preview stores sRGB bytes; decoded they are the linear values to 8-bit precision.
-  Spectrum a = sc.bsdfAt(0, {0.25f, 0.5f}).description().reflectance;
+  Spectrum a = sc.bsdfAt(0, {0.25f, 0.5f}).reflectance();
   expectNear(a, {0.5f, 0.25f, 1}, 0.005f);
   // Read as linear, the same bytes are the sRGB-encoded values: brighter.
-  Spectrum lin = sc.bsdfAt(1, {0.25f, 0.5f}).description().reflectance;
+  Spectrum lin = sc.bsdfAt(1, {0.25f, 0.5f}).reflectance();
   EXPECT_NEAR(lin.x, 0.7354f, 0.005f);
   EXPECT_NEAR(lin.y, 0.5371f, 0.005f);
   // The EXR is linear floats, exact, times its scale.
-  expectNear(sc.bsdfAt(2, {0.25f, 0.5f}).description().reflectance, {1, 0.5f, 2}, 1e-6f);
+  expectNear(sc.bsdfAt(2, {0.25f, 0.5f}).reflectance(), {1, 0.5f, 2}, 1e-6f);
   // Between the two texels, halfway: bilinear.
-  expectNear(sc.bsdfAt(2, {0.5f, 0.5f}).description().reflectance, {0.5f, 0.25f, 1}, 1e-6f);
+  expectNear(sc.bsdfAt(2, {0.5f, 0.5f}).reflectance(), {0.5f, 0.25f, 1}, 1e-6f);
 }
 
 TEST(PbrtLoader, IncludeAndPlyMeshes) {
