@@ -6,7 +6,7 @@ renders low and a few high, unbiased on average).
 
   bench/seed_means.py OUT SCENE [--algorithm mlt] [--seeds 601-800] [--budget 512]
       [--reference bdpt] [--reference-seeds 501-520] [--reference-budget 256] [--size 32]
-      [--glass-ball INDEX] [--farm-args "..."]
+      [--glass-ball INDEX] [--farm-args "..."] [--algorithm-args=...]
 
 Renders SCENE (or, with --glass-ball, bench/glass_ball_index.py's Cornell box with a glass ball
 at that index) at SIZE x SIZE, unbounded depth, by work count (--mpp or --spp, never time, so
@@ -29,7 +29,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MARKOV = {'pssmlt', 'pssmlt-pt', 'mmlt', 'mlt'}
 
 
-def render_seeds(a, scene, algorithm, seeds, budget):
+def render_seeds(a, scene, algorithm, seeds, budget, extra=()):
     """Each seed's grey image and, for the Markov chains, Z and its candidate count."""
     images, zs, counts = [], [], []
     for seed in seeds:
@@ -38,7 +38,7 @@ def render_seeds(a, scene, algorithm, seeds, budget):
         done = subprocess.run([a.farm, 'render', scene, '-o', image, '--algorithm', algorithm,
                                '--width', str(a.size), '--height', str(a.size), '--max-depth',
                                '-1', '--seed', str(seed), '--threads', '2'] + work +
-                              a.farm_args.split(), capture_output=True, text=True)
+                              a.farm_args.split() + list(extra), capture_output=True, text=True)
         if done.returncode != 0:
             raise SystemExit(f'{image}: {done.stderr.strip()[-400:]}')
         images.append(load(image).mean(axis=2))
@@ -63,6 +63,8 @@ def main():
     ap.add_argument('--size', type=int, default=32)
     ap.add_argument('--glass-ball', help='the Cornell box with a glass ball at this index')
     ap.add_argument('--farm-args', default='', help='more options for every render')
+    ap.add_argument('--algorithm-args', default='',
+                    help="more options for the algorithm's renders only (not the reference's)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     scene = a.scene
@@ -77,7 +79,8 @@ def main():
     mean_image = reference.mean(axis=0)
     keep = mean_image < 20 * np.median(mean_image)
     ref = np.array([r[keep].mean() for r in reference])
-    renders, zs, counts = render_seeds(a, scene, a.algorithm, seed_list(a.seeds), a.budget)
+    renders, zs, counts = render_seeds(a, scene, a.algorithm, seed_list(a.seeds), a.budget,
+                                       a.algorithm_args.split())
     means = np.array([r[keep].mean() for r in renders])
 
     def se(v):
