@@ -83,12 +83,16 @@ class PythonClientTest(unittest.TestCase):
 
     def test_submit_watch_fetch(self):
         client = FarmClient(self.address, ca=self.at("ca.pem"), token_file=self.at("submit.token"))
-        job = client.submit(SCENE, algorithm="pssmlt", width=48, height=32, mpp=64, seed=7)
+        job = client.submit(SCENE, algorithm="pssmlt", width=48, height=32, mpp=64, seed=7,
+                            combine_large_steps=True)
         self.assertTrue(job.startswith("job-"), job)
 
         messages = list(client.watch(job, interval=0.2))
         self.assertGreaterEqual(len(messages), 2)
         self.assertEqual(messages[-1].phase, farm_pb2.DONE, messages[-1].error)
+        # Kelemen's combination reached the job: its large steps are not pooled into Z.
+        self.assertTrue(messages[-1].settings.combine_large_steps)
+        self.assertEqual(messages[-1].large_steps, 0)
         fractions = [m.fraction for m in messages]
         self.assertEqual(fractions, sorted(fractions))
         self.assertEqual(sum(len(m.error_series) for m in messages),
