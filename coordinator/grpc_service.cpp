@@ -592,7 +592,7 @@ class WorkerService final : public v1::WorkerApi::Service {
     flush.state = header.state();
     flush.finished = header.finished();
     for (const v1::MutationTally& t : header.tallies())
-      flush.tallies.push_back({t.name(), t.proposed(), t.accepted()});
+      flush.tallies.push_back(::farm::fromProto(t));
     flush.largeSteps = largeStepsFromProto(header.large_steps());
     EncodedSplats encoded;
     encoded.sparse = header.sparse();

@@ -144,15 +144,6 @@ bool phaseFromCode(int64_t code, JobPhase* phase) {
   return false;
 }
 
-void toRecord(const MutationTally& t, v1::MutationTally* out) {
-  out->set_name(t.name);
-  out->set_proposed(t.proposed);
-  out->set_accepted(t.accepted);
-}
-MutationTally fromRecord(const v1::MutationTally& t) {
-  return MutationTally{t.name(), t.proposed(), t.accepted()};
-}
-
 std::string encodeSpec(const JobSpec& spec) {
   store::v1::JobRecord r;
   *r.mutable_settings() = toProto(spec.settings);
@@ -262,7 +253,7 @@ void encodeEntry(const ChainFlush& flush, store::v1::FlushRecord* r) {
   r->set_rejected_negative(flush.rejected.negative);
   r->set_rays(flush.rays);
   r->set_state(flush.state);
-  for (const MutationTally& t : flush.tallies) toRecord(t, r->add_tallies());
+  for (const MutationTally& t : flush.tallies) toProto(t, r->add_tallies());
   if (flush.largeSteps.count != 0) toProto(flush.largeSteps, r->mutable_large_steps());
   r->set_finished(flush.finished);
 }
@@ -277,7 +268,7 @@ ChainFlush decodeEntry(const store::v1::FlushRecord& r) {
   flush.rejected.negative = r.rejected_negative();
   flush.rays = r.rays();
   flush.state = r.state();
-  for (const v1::MutationTally& t : r.tallies()) flush.tallies.push_back(fromRecord(t));
+  for (const v1::MutationTally& t : r.tallies()) flush.tallies.push_back(fromProto(t));
   flush.largeSteps = largeStepsFromProto(r.large_steps());
   flush.finished = r.finished();
   return flush;
@@ -354,7 +345,7 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
   r.set_rays(s.rays);
   r.set_accepted_flushes(s.acceptedFlushes);
   for (int64_t w : s.groupWork) r.add_group_work(w);
-  for (const MutationTally& t : s.tallies) toRecord(t, r.add_tallies());
+  for (const MutationTally& t : s.tallies) toProto(t, r.add_tallies());
   if (s.largeSteps.count != 0) toProto(s.largeSteps, r.mutable_large_steps());
   for (size_t i = 0; i < chains.size(); ++i) {
     store::v1::ChainRecord* c = r.add_chains();
@@ -408,7 +399,7 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string
   s->rays = r.rays();
   s->acceptedFlushes = r.accepted_flushes();
   s->groupWork.assign(r.group_work().begin(), r.group_work().end());
-  for (const v1::MutationTally& t : r.tallies()) s->tallies.push_back(fromRecord(t));
+  for (const v1::MutationTally& t : r.tallies()) s->tallies.push_back(fromProto(t));
   s->largeSteps = largeStepsFromProto(r.large_steps());
   for (const store::v1::ChainRecord& c : r.chains()) {
     chains->push_back({c.resume_state(), c.mutations_done(), c.next_flush_index(), c.finished()});

@@ -280,13 +280,18 @@ void toProto(const ChainFlush& f, uint64_t epoch, v1::BatchEntry* e) {
   e->set_rays(f.rays);
   e->set_state(f.state);
   e->set_finished(f.finished);
-  for (const MutationTally& t : f.tallies) {
-    v1::MutationTally* tally = e->add_tallies();
-    tally->set_name(t.name);
-    tally->set_proposed(t.proposed);
-    tally->set_accepted(t.accepted);
-  }
+  for (const MutationTally& t : f.tallies) toProto(t, e->add_tallies());
   if (f.largeSteps.count != 0) toProto(f.largeSteps, e->mutable_large_steps());
+}
+
+void toProto(const MutationTally& tally, v1::MutationTally* out) {
+  out->set_name(tally.name);
+  out->set_proposed(tally.proposed);
+  out->set_accepted(tally.accepted);
+}
+
+MutationTally fromProto(const v1::MutationTally& tally) {
+  return MutationTally{tally.name(), tally.proposed(), tally.accepted()};
 }
 
 void toProto(const LargeStepSums& sums, v1::LargeStepSums* out) {
@@ -314,9 +319,7 @@ ChainFlush fromProto(const v1::BatchEntry& e) {
   f.rays = e.rays();
   f.state = e.state();
   f.finished = e.finished();
-  for (const v1::MutationTally& t : e.tallies()) {
-    f.tallies.push_back({t.name(), t.proposed(), t.accepted()});
-  }
+  for (const v1::MutationTally& t : e.tallies()) f.tallies.push_back(fromProto(t));
   f.largeSteps = largeStepsFromProto(e.large_steps());
   return f;
 }
@@ -355,12 +358,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   m->set_rejected_nan(p.rejected.nan);
   m->set_rejected_infinite(p.rejected.infinite);
   m->set_rejected_negative(p.rejected.negative);
-  for (const MutationTally& t : p.tallies) {
-    v1::MutationTally* tally = m->add_tallies();
-    tally->set_name(t.name);
-    tally->set_proposed(t.proposed);
-    tally->set_accepted(t.accepted);
-  }
+  for (const MutationTally& t : p.tallies) toProto(t, m->add_tallies());
   for (const std::string& w : p.warnings) m->add_warnings(w);
   for (const std::string& line : p.renderPlan) m->add_render_plan(line);
   for (const std::string& w : p.setAside) m->add_set_aside(w);
@@ -389,8 +387,7 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->rejected.infinite = m.rejected_infinite();
   p->rejected.negative = m.rejected_negative();
   p->tallies.clear();  // *p may hold an earlier answer (status asks twice)
-  for (const v1::MutationTally& t : m.tallies())
-    p->tallies.push_back({t.name(), t.proposed(), t.accepted()});
+  for (const v1::MutationTally& t : m.tallies()) p->tallies.push_back(fromProto(t));
   p->warnings.assign(m.warnings().begin(), m.warnings().end());
   p->renderPlan.assign(m.render_plan().begin(), m.render_plan().end());
   p->setAside.assign(m.set_aside().begin(), m.set_aside().end());

@@ -221,12 +221,7 @@ struct RemoteChainSource::Impl {
     header->set_rays(flush.rays);
     header->set_state(flush.state);
     header->set_finished(flush.finished);
-    for (const MutationTally& t : flush.tallies) {
-      v1::MutationTally* tally = header->add_tallies();
-      tally->set_name(t.name);
-      tally->set_proposed(t.proposed);
-      tally->set_accepted(t.accepted);
-    }
+    for (const MutationTally& t : flush.tallies) toProto(t, header->add_tallies());
     if (flush.largeSteps.count != 0) toProto(flush.largeSteps, header->mutable_large_steps());
     header->set_splat_bytes(splats.bytes.size());
     header->set_sparse(splats.sparse);
