@@ -14,14 +14,13 @@ noise. Writes OUT/<scene>/<algorithm>-<mode>-<seed>/ (the render's report) and O
 """
 import argparse
 import json
-import math
 import os
 import subprocess
 
 import OpenImageIO as oiio
 
-from corpus_common import (add_corpus_arguments, corpus_scenes, reference_floor, reference_path,
-                           scene_path, write_table)
+from corpus_common import (add_corpus_arguments, corpus_scenes, geometric_mean, reference_floor,
+                           reference_path, scene_path, write_table)
 
 MODES = {"alone": [], "combined": ["--combine-large-steps"]}
 
@@ -89,7 +88,7 @@ def main():
     lines.append("")
     for (half, a), rs in sorted(ratios.items()):
         good = [r for r in rs if r > 0]
-        geo = math.exp(sum(math.log(r) for r in good) / len(good)) if good else float("nan")
+        geo = geometric_mean(good) if good else float("nan")
         lines.append("%s half, %s: combined / alone %.2f geometric mean over %d scenes, %d of "
                      "them below 1, range %.2f-%.2f" % (half, a, geo, len(rs),
                                                         sum(r < 1 for r in rs), min(rs), max(rs)))

@@ -3,6 +3,7 @@ combine_offline.py): their common arguments, the scenes of one half of the corpu
 tools/make_corpus.py wrote, and where each scene's reference and its own error lie
 (tools/corpus_references.py)."""
 import json
+import math
 import os
 
 
@@ -42,6 +43,11 @@ def reference_floor(args, s):
     measured error, which is about the sum of the two, independent as they are."""
     with open(os.path.join(os.path.dirname(scene_path(args, s)), "reference.json")) as f:
         return json.load(f)["reference_relmse"]
+
+
+def geometric_mean(xs):
+    """The geometric mean of positive numbers (of ratios of errors, in the benches' tables)."""
+    return math.exp(sum(math.log(x) for x in xs) / len(xs))
 
 
 def write_table(args, name, lines):

@@ -24,13 +24,12 @@ and three seeds about 2.2 hours. Run it alone: timings beside a build are noise.
 import argparse
 import csv
 import json
-import math
 import os
 import subprocess
 import sys
 
-from corpus_common import (add_corpus_arguments, corpus_scenes, reference_floor, reference_path,
-                           scene_path)
+from corpus_common import (add_corpus_arguments, corpus_scenes, geometric_mean, reference_floor,
+                           reference_path, scene_path, write_table)
 
 
 def series(path):
@@ -178,14 +177,10 @@ def tabulate(args, scenes, algorithms, times):
                              "%.2fx, geometric mean %.2fx" % (
                                  t, what, sum(x <= 1.2 for x in ratios), len(ratios),
                                  max(ratios),
-                                 math.exp(sum(math.log(x) for x in ratios) / len(ratios))))
-    table = "\n".join(lines) + "\n"
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, "table.md"), "w") as f:
-        f.write(table)
+                                 geometric_mean(ratios)))
+    write_table(args, "table.md", lines)
     with open(os.path.join(args.out, "table.json"), "w") as f:
         json.dump(rows, f, indent=1)
-    print(table)
 
 
 if __name__ == "__main__":

@@ -14,12 +14,11 @@ Writes OUT/<scene>/<algorithm>-seed-<n>/ and OUT/estimates.md.
 """
 import argparse
 import json
-import math
 import os
 import subprocess
 
-from corpus_common import (add_corpus_arguments, corpus_scenes, reference_path, scene_path,
-                           write_table)
+from corpus_common import (add_corpus_arguments, corpus_scenes, geometric_mean, reference_path,
+                           scene_path, write_table)
 
 
 def main():
@@ -63,7 +62,7 @@ def main():
     for a in algorithms:
         if every[a]:
             lines.append("%s: estimate / measured, geometric mean %.2f, range %.2g-%.2g" % (
-                a, math.exp(sum(math.log(x) for x in every[a]) / len(every[a])),
+                a, geometric_mean(every[a]),
                 min(every[a]), max(every[a])))
     write_table(args, "estimates.md", lines)
 
