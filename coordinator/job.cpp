@@ -388,66 +388,38 @@ bool Job::renew(const std::string& worker, uint32_t chain, uint64_t epoch,
 
 Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& flush,
                         SteadyClock::time_point now, FlushAck* ack, const EncodedSplats* wire) {
+  // A single flush is a batch of one (acceptLocked); only its answer differs: what would refuse
+  // an entry of a batch is the request's fault here, and says so in its status.
+  const std::string name =
+      "flush " + std::to_string(flush.flushIndex) + " of chain " + std::to_string(flush.chainIndex);
+  FlushBatch batch;
+  batch.film.width = flush.width;
+  batch.film.height = flush.height;
+  batch.film.splats = std::move(flush.splats);
+  flush.splats.clear();
+  batch.entries.push_back(std::move(flush));
+  batch.epochs.push_back(epoch);
   std::lock_guard<std::mutex> lock(mutex_);
-  *ack = FlushAck();
-  if (isTerminal(phase_) || phase_ == JobPhase::kFinishing) {
-    ack->result = FlushAck::Result::kDiscarded;
-    ack->stop = true;
-    ack->reason = std::string("job ") + id_ + " is " + jobPhaseName(phase_);
-    return Status::ok();
-  }
-  if (phase_ != JobPhase::kRendering) {
-    return Status::failedPrecondition("job " + id_ + " is " + jobPhaseName(phase_) +
-                                      "; it has no chains yet");
-  }
-  const uint32_t chain = flush.chainIndex;
-  if (!scheduler_->hasChain(chain)) {
-    return Status::notFound("job " + id_ + " has no chain " + std::to_string(chain) + " (it has " +
-                            std::to_string(scheduler_->chainCount()) + ")");
-  }
-  enforceBudgetLocked(now);
-
-  std::string problem;
-  FlushOutcome outcome = aggregator_->check(flush, &problem);
-  if (outcome == FlushOutcome::kAccepted) {
-    if (store_) {
-      // Durable before it counts: the worker hears "accepted" only for a flush on disk.
-      Status recorded =
-          store_->appendFlush(id_, flush, secondsSince(submitted_, now), &tailBytes_, wire);
-      if (!recorded.isOk()) {
-        log(recorded.message());
-        return Status(StatusCode::kUnavailable,
-                      "job " + id_ + ": the coordinator cannot record flushes now (send it again)");
-      }
-    }
-    outcome = aggregator_->add(flush, &problem);
-  }
-  switch (outcome) {
-    case FlushOutcome::kAccepted:
-      scheduler_->recordFlush(chain, flush.flushIndex, flush.mutations, std::move(flush.state),
-                              flush.finished, worker, epoch, now);
-      ack->result = FlushAck::Result::kAccepted;
-      break;
-    case FlushOutcome::kDuplicate:
-      ack->result = FlushAck::Result::kDuplicate;
-      break;
+  std::vector<FlushAck> acks;
+  std::vector<FlushOutcome> outcomes;
+  std::vector<std::string> problems;
+  Status status =
+      acceptLocked(worker, std::move(batch), name, now, &acks, &outcomes, &problems, wire);
+  if (!status.isOk()) return status;
+  *ack = acks.front();
+  const std::string why = "job " + id_ + ": " + (outcomes.empty() ? "" : problems.front());
+  switch (outcomes.empty() ? FlushOutcome::kAccepted : outcomes.front()) {
     case FlushOutcome::kOutOfOrder:
-      return Status::failedPrecondition("job " + id_ + ": " + problem);
+      return Status::failedPrecondition(why);
     case FlushOutcome::kUnknownChain:
-      return Status::notFound("job " + id_ + ": " + problem);
+      return Status::notFound(why);
     case FlushOutcome::kWrongSize:
     case FlushOutcome::kBadValues:
-      countFailureLocked(worker, chain, problem);
-      return Status::invalidArgument("job " + id_ + ": " + problem);
+      return Status::invalidArgument(why);
+    case FlushOutcome::kAccepted:
+    case FlushOutcome::kDuplicate:
+      break;
   }
-
-  answerLocked(chain, worker, epoch, outcome == FlushOutcome::kAccepted, flush.finished,
-               flush.mutations, ack);
-  if (outcome == FlushOutcome::kAccepted) {
-    recordErrorLocked(now, false);
-    checkpointLocked();
-  }
-  finishIfCompleteLocked(now);
   return Status::ok();
 }
 
@@ -480,7 +452,19 @@ void Job::answerLocked(uint32_t chain, const std::string& worker, uint64_t epoch
 Status Job::acceptBatch(const std::string& worker, FlushBatch&& batch, SteadyClock::time_point now,
                         std::vector<FlushAck>* acks, const EncodedSplats* wire) {
   std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<FlushOutcome> outcomes;
+  std::vector<std::string> problems;
+  return acceptLocked(worker, std::move(batch), "the batch's film", now, acks, &outcomes, &problems,
+                      wire);
+}
+
+Status Job::acceptLocked(const std::string& worker, FlushBatch&& batch, const std::string& filmName,
+                         SteadyClock::time_point now, std::vector<FlushAck>* acks,
+                         std::vector<FlushOutcome>* outcomes, std::vector<std::string>* problems,
+                         const EncodedSplats* wire) {
   acks->assign(batch.entries.size(), FlushAck());
+  outcomes->clear();
+  problems->assign(batch.entries.size(), std::string());
   if (batch.entries.empty() || batch.epochs.size() != batch.entries.size()) {
     return Status::invalidArgument("a batch needs one lease epoch for each of its flushes");
   }
@@ -509,7 +493,7 @@ Status Job::acceptBatch(const std::string& worker, FlushBatch&& batch, SteadyClo
   std::string problem;
   FlushOutcome film = aggregator_->checkGroups(batch, &problem);
   if (film == FlushOutcome::kAccepted)
-    film = aggregator_->checkFilm(batch.film, "the batch's film", &problem);
+    film = aggregator_->checkFilm(batch.film, filmName, &problem);
   if (film != FlushOutcome::kAccepted) {
     for (uint32_t chain : chains) {
       if (scheduler_->hasChain(chain)) countFailureLocked(worker, chain, problem);
@@ -517,17 +501,15 @@ Status Job::acceptBatch(const std::string& worker, FlushBatch&& batch, SteadyClo
     return Status::invalidArgument("job " + id_ + ": " + problem);
   }
   // Each entry's verdict on its own; the batch counts only when every one is "the next flush".
-  std::vector<FlushOutcome> outcomes;
-  std::vector<std::string> problems(batch.entries.size());
   size_t next = 0;
   for (size_t i = 0; i < batch.entries.size(); ++i) {
-    outcomes.push_back(aggregator_->checkEntry(batch.entries[i], &problems[i]));
-    next += outcomes[i] == FlushOutcome::kAccepted;
+    outcomes->push_back(aggregator_->checkEntry(batch.entries[i], &(*problems)[i]));
+    next += (*outcomes)[i] == FlushOutcome::kAccepted;
   }
   const bool take = next == batch.entries.size();
   if (take) {
     if (store_) {
-      // Durable before it counts, as a single flush (acceptFlush).
+      // Durable before it counts: the worker hears "accepted" only for a flush on disk.
       Status recorded =
           store_->appendBatch(id_, batch, secondsSince(submitted_, now), &tailBytes_, wire);
       if (!recorded.isOk()) {
@@ -543,7 +525,7 @@ Status Job::acceptBatch(const std::string& worker, FlushBatch&& batch, SteadyClo
   for (size_t i = 0; i < batch.entries.size(); ++i) {
     ChainFlush& entry = batch.entries[i];
     FlushAck& ack = (*acks)[i];
-    switch (outcomes[i]) {
+    switch ((*outcomes)[i]) {
       case FlushOutcome::kAccepted:
         if (take) {
           scheduler_->recordFlush(entry.chainIndex, entry.flushIndex, entry.mutations,
@@ -559,12 +541,12 @@ Status Job::acceptBatch(const std::string& worker, FlushBatch&& batch, SteadyClo
         break;
       case FlushOutcome::kBadValues:
       case FlushOutcome::kWrongSize:
-        countFailureLocked(worker, entry.chainIndex, problems[i]);
+        countFailureLocked(worker, entry.chainIndex, (*problems)[i]);
         [[fallthrough]];
       case FlushOutcome::kOutOfOrder:
       case FlushOutcome::kUnknownChain:
         ack.result = FlushAck::Result::kRefused;
-        ack.reason = problems[i];
+        ack.reason = (*problems)[i];
         break;
     }
     if (ack.result == FlushAck::Result::kAccepted || ack.result == FlushAck::Result::kDuplicate) {

@@ -145,6 +145,14 @@ class Job {
   void countFailureLocked(const std::string& worker, uint32_t chain, const std::string& why);
   // Whether the chain of a counted (or duplicate) flush goes on: `ack` gets stop and its reason
   // when the job's time is up, the worker no longer holds the lease, or the chain yields.
+  // The one way a flush counts, a single one as a batch of one (acceptFlush): the film and each
+  // entry checked, the batch made durable and added when every entry is its chain's next flush,
+  // each entry answered. `filmName` names the film in a problem; (*outcomes)[i] and
+  // (*problems)[i] are entry i's verdict (empty when the film or the job answered first).
+  Status acceptLocked(const std::string& worker, FlushBatch&& batch, const std::string& filmName,
+                      SteadyClock::time_point now, std::vector<FlushAck>* acks,
+                      std::vector<FlushOutcome>* outcomes, std::vector<std::string>* problems,
+                      const EncodedSplats* wire);
   void answerLocked(uint32_t chain, const std::string& worker, uint64_t epoch, bool accepted,
                     bool finished, int64_t mutations, FlushAck* ack);
   void enforceBudgetLocked(SteadyClock::time_point now);

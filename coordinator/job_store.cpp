@@ -287,13 +287,6 @@ void encodeFilm(const ChainFlush& film, const EncodedSplats* wire, store::v1::Fl
   r->set_raw_splat_bytes(splats.rawBytes);
 }
 
-std::string encodeFlush(const ChainFlush& flush, const EncodedSplats* wire) {
-  store::v1::FlushRecord r;
-  encodeEntry(flush, &r);
-  encodeFilm(flush, wire, &r);
-  return r.SerializeAsString();
-}
-
 // A batch: its film, and each entry as a record of its own without one.
 std::string encodeBatch(const FlushBatch& batch, const EncodedSplats* wire) {
   store::v1::FlushRecord r;
@@ -650,14 +643,6 @@ Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double ela
                .bind(3, id)
                .run();
   });
-}
-
-Status JobStore::appendFlush(const std::string& id, const ChainFlush& flush, double elapsedSeconds,
-                             uint64_t* tailBytes, const EncodedSplats* wire) {
-  return appendRecord(id, encodeFlush(flush, wire),  // encoded outside the lock
-                      "cannot record flush " + std::to_string(flush.flushIndex) + " of chain " +
-                          std::to_string(flush.chainIndex) + " of job " + id,
-                      elapsedSeconds, tailBytes);
 }
 
 Status JobStore::appendBatch(const std::string& id, const FlushBatch& batch, double elapsedSeconds,

@@ -104,13 +104,11 @@ class JobStore {
                   double elapsedSeconds, const SplatAggregator::Snapshot* finalCounts = nullptr);
   // The job renders from now on with this plan.
   Status savePlan(const std::string& id, const JobPlan& plan, double elapsedSeconds);
-  // Records an accepted flush; *tailBytes is then the size of the job's log since its last
-  // checkpoint (the caller checkpoints when it grows past what a restart should replay).
-  // `wire`: the flush's splats as they arrived (they decode to flush.splats), kept as they are
-  // instead of encoded again; null: encoded from flush.splats.
-  Status appendFlush(const std::string& id, const ChainFlush& flush, double elapsedSeconds,
-                     uint64_t* tailBytes, const EncodedSplats* wire = nullptr);
-  // The same for a batch (one record: its film once, then its entries); `wire` is its film's.
+  // Records an accepted batch (one record: its film once, then its entries; a single flush is a
+  // batch of one); *tailBytes is then the size of the job's log since its last checkpoint (the
+  // caller checkpoints when it grows past what a restart should replay). `wire`: the film's
+  // splats as they arrived (they decode to batch.film.splats), kept as they are instead of
+  // encoded again; null: encoded from the film.
   Status appendBatch(const std::string& id, const FlushBatch& batch, double elapsedSeconds,
                      uint64_t* tailBytes, const EncodedSplats* wire = nullptr);
   // Replaces the job's log so far by this state of its sums (a file beside the log) and chains.

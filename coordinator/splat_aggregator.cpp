@@ -87,12 +87,14 @@ SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
 }
 
 FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem) {
-  const FlushOutcome outcome = check(flush, problem);
-  if (outcome != FlushOutcome::kAccepted) return outcome;
-  std::vector<double>& sums = groupSums_[chainGroup_[flush.chainIndex]];
-  for (size_t i = 0; i < sums.size(); ++i) sums[i] += double(flush.splats[i]);
-  countFlush(flush);
-  return FlushOutcome::kAccepted;
+  FlushBatch one;  // a single flush is a batch of one
+  one.film.width = flush.width;
+  one.film.height = flush.height;
+  one.film.splats = flush.splats;
+  one.entries.push_back(flush);
+  one.entries.back().splats.clear();
+  one.epochs.push_back(0);
+  return addBatch(one, problem);
 }
 
 FlushOutcome SplatAggregator::addBatch(const FlushBatch& batch, std::string* problem) {
@@ -159,23 +161,14 @@ void SplatAggregator::countFlush(const ChainFlush& flush) {
   ++nextFlush_[flush.chainIndex];
 }
 
-FlushOutcome SplatAggregator::check(const ChainFlush& flush, std::string* problem) const {
-  const FlushOutcome outcome = checkEntry(flush, problem);
-  if (outcome != FlushOutcome::kAccepted) return outcome;
-  return checkFilm(
-      flush,
-      "flush " + std::to_string(flush.flushIndex) + " of chain " + std::to_string(flush.chainIndex),
-      problem);
-}
-
 FlushOutcome SplatAggregator::checkEntry(const ChainFlush& flush, std::string* problem) const {
   std::string ignored;
   std::string& why = problem ? *problem : ignored;
   const std::string name =
       "flush " + std::to_string(flush.flushIndex) + " of chain " + std::to_string(flush.chainIndex);
   if (flush.chainIndex >= nextFlush_.size()) {
-    why = "chain " + std::to_string(flush.chainIndex) + " does not exist (the job has " +
-          std::to_string(nextFlush_.size()) + " chains)";
+    why = "the job has no chain " + std::to_string(flush.chainIndex) + " (it has " +
+          std::to_string(nextFlush_.size()) + ")";
     return FlushOutcome::kUnknownChain;
   }
   const uint32_t next = nextFlush_[flush.chainIndex];

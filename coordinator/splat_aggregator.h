@@ -62,16 +62,16 @@ class SplatAggregator {
   // How many groups chainGroups names (1 + the largest; 1 when empty).
   static uint32_t groupCount(const std::vector<uint32_t>& chainGroups);
 
-  // What add() would answer, changing nothing: a durable coordinator records a flush between
-  // check() and add(), so that a flush it could not record is not summed either.
-  FlushOutcome check(const ChainFlush& flush, std::string* problem = nullptr) const;
-  // The parts of check(): a flush's place and counts (what a batch entry carries), and its film.
+  // What addBatch() would answer, changing nothing, in parts: a flush's place and counts (what a
+  // batch entry carries), its film, and the entries' groups. A durable coordinator records a
+  // batch between these and addBatch(), so that one it could not record is not summed either.
   FlushOutcome checkEntry(const ChainFlush& flush, std::string* problem = nullptr) const;
   FlushOutcome checkFilm(const ChainFlush& flush, const std::string& name,
                          std::string* problem = nullptr) const;
   // kBadValues when the batch's entries (of chains that exist) are of more than one error group.
   FlushOutcome checkGroups(const FlushBatch& batch, std::string* problem = nullptr) const;
-  // Adds the flush's splats if it is the next one of its chain; *problem says why not.
+  // A single flush, as a batch of one: adds its splats if it is the next one of its chain;
+  // *problem says why not.
   FlushOutcome add(const ChainFlush& flush, std::string* problem = nullptr);
   // Adds the batch's film once and every entry's counts, if every entry is the next flush of
   // its chain (one entry a chain) and the film is sound; otherwise changes nothing and answers
