@@ -554,66 +554,20 @@ class WorkerService final : public v1::WorkerApi::Service {
       return invalid("flush ended after " + std::to_string(bytes.size()) + " of " +
                      std::to_string(expectedBytes) + " splat bytes");
     }
-    const bool batch = header.entries_size() > 0;
-    if (size_t(header.entries_size()) > kMaxBatchEntries) {
-      return invalid("a batch holds " + std::to_string(header.entries_size()) +
-                     " flushes; at most " + std::to_string(kMaxBatchEntries));
+    if (header.entries_size() == 0 || size_t(header.entries_size()) > kMaxBatchEntries) {
+      return invalid("a flush holds " + std::to_string(header.entries_size()) +
+                     " chains' entries; 1 to " + std::to_string(kMaxBatchEntries));
     }
     Sha256 digest;
     digest.update(bytes);
-    if (batch) {
-      for (const v1::BatchEntry& e : header.entries()) digest.update(e.state());
-    } else {
-      digest.update(header.state());
-    }
+    for (const v1::FlushEntry& e : header.entries()) digest.update(e.state());
     const std::string actual = digest.hexDigest();
     if (actual != header.checksum()) {
       return {grpc::StatusCode::DATA_LOSS,
               "checksum mismatch: the header says " + header.checksum() +
                   ", the received splats and state hash to " + actual + " (resend the flush)"};
     }
-    if (batch) return acceptBatch(header, std::move(bytes), values, response);
-    ChainFlush flush;
-    flush.chainIndex = header.chain_index();
-    flush.flushIndex = header.flush_index();
-    flush.mutations = header.mutations();
-    flush.width = header.width();
-    flush.height = header.height();
-    flush.rejected.nan = header.rejected_nan();
-    flush.rejected.infinite = header.rejected_infinite();
-    flush.rejected.negative = header.rejected_negative();
-    if (header.rejected_splats() != flush.rejected.total()) {
-      return {grpc::StatusCode::INVALID_ARGUMENT,
-              "rejected_splats (" + std::to_string(header.rejected_splats()) +
-                  ") is not the sum of the rejected NaN, infinite and negative splats (" +
-                  std::to_string(flush.rejected.total()) + ")"};
-    }
-    flush.rays = header.rays();
-    flush.state = header.state();
-    flush.finished = header.finished();
-    for (const v1::MutationTally& t : header.tallies())
-      flush.tallies.push_back(::farm::fromProto(t));
-    flush.largeSteps = largeStepsFromProto(header.large_steps());
-    EncodedSplats encoded;
-    encoded.sparse = header.sparse();
-    encoded.compressed = header.compressed();
-    encoded.rawBytes = header.raw_splat_bytes();
-    encoded.bytes = std::move(bytes);
-    std::string problem;
-    if (!decodeSplats(encoded, values, &flush.splats, &problem)) {
-      return invalid("flush " + std::to_string(header.flush_index()) + " of chain " +
-                     std::to_string(header.chain_index()) + ": " + problem);
-    }
-
-    FlushAck ack;
-    s = coordinator_->acceptFlush(header.worker_id(), header.job_id(), header.epoch(),
-                                  std::move(flush), &ack, &encoded);
-    if (!s.isOk()) return toGrpc(s);
-    response->set_result(toResult(ack.result));
-    response->set_stop(ack.stop);
-    response->set_reason(ack.reason);
-    response->set_yielded(ack.yielded);
-    return grpc::Status::OK;
+    return accept(header, std::move(bytes), values, response);
   }
 
  private:
@@ -633,11 +587,12 @@ class WorkerService final : public v1::WorkerApi::Service {
     return v1::UploadFlushResponse::RESULT_UNSPECIFIED;
   }
 
-  // The rest of UploadFlush for a batch (FlushHeader.entries), its bytes received and checked.
-  grpc::Status acceptBatch(const v1::FlushHeader& header, std::string&& bytes, size_t values,
-                           v1::UploadFlushResponse* response) {
+  // The rest of UploadFlush, its bytes received and checked: a batch of one or more chains'
+  // flushes (a single flush is a batch of one).
+  grpc::Status accept(const v1::FlushHeader& header, std::string&& bytes, size_t values,
+                      v1::UploadFlushResponse* response) {
     FlushBatch batch;
-    for (const v1::BatchEntry& e : header.entries()) {
+    for (const v1::FlushEntry& e : header.entries()) {
       batch.entries.push_back(::farm::fromProto(e));
       batch.epochs.push_back(e.epoch());
     }
@@ -650,8 +605,8 @@ class WorkerService final : public v1::WorkerApi::Service {
     encoded.bytes = std::move(bytes);
     std::string problem;
     if (!decodeSplats(encoded, values, &batch.film.splats, &problem)) {
-      return invalid("a batch of " + std::to_string(header.entries_size()) +
-                     " flushes: " + problem);
+      return invalid(std::string(header.entries_size() == 1 ? "a flush" : "a batch") + " of " +
+                     std::to_string(header.entries_size()) + " chains: " + problem);
     }
     std::vector<FlushAck> acks;
     Status s = coordinator_->acceptBatch(header.worker_id(), header.job_id(), std::move(batch),

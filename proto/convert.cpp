@@ -269,7 +269,7 @@ JobPhase fromProto(v1::JobPhase phase) {
   }
 }
 
-void toProto(const ChainFlush& f, uint64_t epoch, v1::BatchEntry* e) {
+void toProto(const ChainFlush& f, uint64_t epoch, v1::FlushEntry* e) {
   e->set_chain_index(f.chainIndex);
   e->set_flush_index(f.flushIndex);
   e->set_epoch(epoch);
@@ -308,7 +308,7 @@ LargeStepSums largeStepsFromProto(const v1::LargeStepSums& sums) {
   return s;
 }
 
-ChainFlush fromProto(const v1::BatchEntry& e) {
+ChainFlush fromProto(const v1::FlushEntry& e) {
   ChainFlush f;
   f.chainIndex = e.chain_index();
   f.flushIndex = e.flush_index();

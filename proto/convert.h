@@ -21,14 +21,15 @@ bool fromProto(const v1::RenderSettings& message, RenderSettings* out, std::stri
 
 v1::ChainSpec toProto(const ChainSpec& spec);
 bool fromProto(const v1::ChainSpec& message, ChainSpec* out, std::string* error);
-// A flush as an entry of a batch (everything but its film) and back.
-void toProto(const ChainFlush& flush, uint64_t epoch, v1::BatchEntry* entry);
+// A chain's flush as an upload's entry (everything but its film; the upload carries the film) and
+// back.
+void toProto(const ChainFlush& flush, uint64_t epoch, v1::FlushEntry* entry);
 void toProto(const LargeStepSums& sums, v1::LargeStepSums* out);
 // A chain's tally of one kind of proposal (a flush's, a job's, the store's records alike).
 void toProto(const MutationTally& tally, v1::MutationTally* out);
 MutationTally fromProto(const v1::MutationTally& tally);
 LargeStepSums largeStepsFromProto(const v1::LargeStepSums& sums);
-ChainFlush fromProto(const v1::BatchEntry& entry);
+ChainFlush fromProto(const v1::FlushEntry& entry);
 
 v1::JobPhase toProto(JobPhase phase);
 // PHASE_UNSPECIFIED and values this build does not know read as submitted.

@@ -9,8 +9,9 @@ namespace farm {
 // 2: sparse and compressed flushes; 3: batches (FlushHeader.entries); 4: mlt's seen emission
 // (ChainSpec.seen_emission_every), which a worker of 3 would drop and render the light twice;
 // 5: RenderSettings.shading_normals, which a worker of 4 would drop and render the scene's
-// convention where the job overrides it
-inline constexpr uint32_t kProtocolVersion = 5;
+// convention where the job overrides it; 6: a single flush is a batch of one (FlushHeader holds
+// its entry in `entries`, where a worker of 5 sends it in the header's own fields)
+inline constexpr uint32_t kProtocolVersion = 6;
 
 // gRPC message size limit, set explicitly on servers and channels (the library default of 4 MiB
 // is implicit and asymmetric between send and receive).

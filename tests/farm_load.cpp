@@ -145,43 +145,9 @@ grpc::Status sendUpload(grpc::ClientWriter<v1::UploadFlushRequest>* writer,
   return writer->Finish();
 }
 
-grpc::Status uploadOnce(v1::WorkerApi::Stub* stub, const std::string& jobId, const SimChain& c,
-                        const SampleFlush& s, v1::UploadFlushResponse* response) {
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  auto writer = stub->UploadFlush(&context, response);
-  v1::UploadFlushRequest message;
-  v1::FlushHeader* h = message.mutable_header();
-  h->set_worker_id(c.worker);
-  h->set_job_id(jobId);
-  h->set_chain_index(c.chain);
-  h->set_flush_index(c.nextFlush);
-  h->set_epoch(c.epoch);
-  h->set_mutations(s.flush.mutations);
-  h->set_width(s.flush.width);
-  h->set_height(s.flush.height);
-  h->set_rejected_splats(s.flush.rejected.total());
-  h->set_rejected_nan(s.flush.rejected.nan);
-  h->set_rejected_infinite(s.flush.rejected.infinite);
-  h->set_rejected_negative(s.flush.rejected.negative);
-  h->set_rays(s.flush.rays);
-  h->set_state(s.flush.state);
-  for (const MutationTally& t : s.flush.tallies) {
-    v1::MutationTally* tally = h->add_tallies();
-    tally->set_name(t.name);
-    tally->set_proposed(t.proposed);
-    tally->set_accepted(t.accepted);
-  }
-  h->set_splat_bytes(s.splats.bytes.size());
-  h->set_sparse(s.splats.sparse);
-  h->set_compressed(s.splats.compressed);
-  h->set_raw_splat_bytes(s.splats.rawBytes);
-  h->set_checksum(s.checksum);
-  return sendUpload(writer.get(), message, s.splats.bytes);
-}
-
-// One upload of a simulated worker's chains as a batch: `film` is their films summed; each
-// chain's entry carries the sample flush it replays. `back`: re-send the previous batch.
+// One upload of a simulated worker's chains as a batch (a single flush: a batch of one): `film`
+// is their films summed; each chain's entry carries the sample flush it replays. `back`: re-send
+// the previous batch.
 grpc::Status uploadBatch(v1::WorkerApi::Stub* stub, const std::string& jobId,
                          const std::vector<SimChain*>& chains, bool back,
                          const std::vector<SampleFlush>& samples, const SampleFlush& film,
@@ -456,10 +422,8 @@ int run(const Options& o) {
         // A retry of the chain's last accepted flush, as a worker that lost the answer sends.
         const bool resend =
             o.duplicateEvery > 0 && c.nextFlush > 0 && (n + 1) % size_t(o.duplicateEvery) == 0;
-        SimChain target = c;
-        if (resend) --target.nextFlush;
         const Clock::time_point t0 = Clock::now();
-        grpc::Status status = uploadOnce(stub.get(), jobId, target, s, &response);
+        grpc::Status status = uploadBatch(stub.get(), jobId, {&c}, resend, samples, s, &response);
         t.latencies.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
         ++t.uploads;
         if (resend && status.ok() && response.result() == v1::UploadFlushResponse::DUPLICATE) {
@@ -474,9 +438,10 @@ int run(const Options& o) {
         } else {
           ++t.refused;
           if (t.firstError.empty()) {
-            t.firstError = status.ok() ? "result " + std::to_string(int(response.result())) + ": " +
-                                             response.reason()
-                                       : status.error_message();
+            t.firstError = status.ok() && response.entries_size() == 1
+                               ? "result " + std::to_string(int(response.entries(0).result())) +
+                                     ": " + response.entries(0).reason()
+                               : status.error_message();
           }
         }
       }

@@ -180,7 +180,7 @@ class HostileRpcTest : public ::testing::Test {
     // (or, with `vanish`, the call is cancelled as a dying process's would be).
     size_t sendBytes = SIZE_MAX;
     bool vanish = false;
-    int64_t rejectedTotal = 0, rejectedNan = 0, rejectedInfinite = 0, rejectedNegative = 0;
+    int64_t rejectedNan = 0, rejectedInfinite = 0, rejectedNegative = 0;
     std::vector<std::tuple<std::string, int64_t, int64_t>> tallies;
   };
 
@@ -195,19 +195,19 @@ class HostileRpcTest : public ::testing::Test {
     v1::FlushHeader* h = first.mutable_header();
     h->set_worker_id(f.workerId);
     h->set_job_id(f.jobId);
-    h->set_chain_index(f.chain);
-    h->set_flush_index(f.flushIndex);
-    h->set_epoch(f.epoch);
-    h->set_mutations(f.mutations);
     h->set_width(f.width);
     h->set_height(f.height);
-    h->set_state(f.state);
-    h->set_rejected_splats(f.rejectedTotal);
-    h->set_rejected_nan(f.rejectedNan);
-    h->set_rejected_infinite(f.rejectedInfinite);
-    h->set_rejected_negative(f.rejectedNegative);
+    v1::FlushEntry* e = h->add_entries();  // a single flush: a batch of one
+    e->set_chain_index(f.chain);
+    e->set_flush_index(f.flushIndex);
+    e->set_epoch(f.epoch);
+    e->set_mutations(f.mutations);
+    e->set_state(f.state);
+    e->set_rejected_nan(f.rejectedNan);
+    e->set_rejected_infinite(f.rejectedInfinite);
+    e->set_rejected_negative(f.rejectedNegative);
     for (const auto& [name, proposed, accepted] : f.tallies) {
-      v1::MutationTally* t = h->add_tallies();
+      v1::MutationTally* t = e->add_tallies();
       t->set_name(name);
       t->set_proposed(proposed);
       t->set_accepted(accepted);
@@ -458,13 +458,24 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   flush.chain = chain;
   flush.epoch = job.lease.epoch();
   flush.splats.assign(16 * 16 * 3, 0.25f);
-  flush.rejectedTotal = flush.rejectedInfinite = 2;
+  flush.rejectedInfinite = 2;
   flush.tallies = {{"small step", 4, 3}};
   v1::UploadFlushResponse response;
 
+  // What is wrong with a chain's entry refuses the entry; what is wrong with the upload as a
+  // whole (its film, its bytes, its worker) fails the call.
+  const auto expectRefused = [&](const Flush& f, const std::string& reason) {
+    grpc::Status status = upload(f, &response);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    EXPECT_EQ(response.result(), v1::UploadFlushResponse::RESEND);
+    ASSERT_EQ(response.entries_size(), 1);
+    EXPECT_EQ(response.entries(0).result(), v1::UploadFlushResponse::REFUSED);
+    EXPECT_NE(response.entries(0).reason().find(reason), std::string::npos)
+        << response.entries(0).reason();
+  };
   Flush unknownChain = flush;
   unknownChain.chain = 9999;
-  EXPECT_STATUS(upload(unknownChain, &response), NOT_FOUND, "has no chain 9999");
+  expectRefused(unknownChain, "has no chain 9999");
 
   Flush corrupt = flush;
   corrupt.corruptChecksum = true;
@@ -485,15 +496,14 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
 
   Flush later = flush;
   later.flushIndex = 5;
-  EXPECT_STATUS(upload(later, &response), FAILED_PRECONDITION, "arrived before flush 0");
+  expectRefused(later, "arrived before flush 0");
 
-  Flush inconsistentCounts = flush;
-  inconsistentCounts.rejectedTotal = 5;
-  inconsistentCounts.rejectedNan = 1;
-  EXPECT_STATUS(upload(inconsistentCounts, &response), INVALID_ARGUMENT, "is not the sum");
+  Flush negativeCount = flush;
+  negativeCount.rejectedNan = -1;
+  expectRefused(negativeCount, "negative count");
   Flush badTally = flush;
   badTally.tallies = {{"lens", 3, 7}};
-  EXPECT_STATUS(upload(badTally, &response), INVALID_ARGUMENT, "malformed tally");
+  expectRefused(badTally, "malformed tally");
 
   // A worker that stops answering mid-upload leaves nothing behind: the stream that ends early
   // is refused, the one cancelled midway never reaches the job.
@@ -512,7 +522,8 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   // The same flush twice: accepted once, a duplicate the second time.
   ASSERT_TRUE(upload(flush, &response).ok());
   EXPECT_EQ(response.result(), v1::UploadFlushResponse::ACCEPTED);
-  EXPECT_FALSE(response.stop());
+  ASSERT_EQ(response.entries_size(), 1);
+  EXPECT_FALSE(response.entries(0).stop());
   grpc::Status status = upload(flush, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.result(), v1::UploadFlushResponse::DUPLICATE);
@@ -530,7 +541,8 @@ TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {
   next.flushIndex = 1;
   ASSERT_TRUE(upload(next, &response).ok());
   EXPECT_EQ(response.result(), v1::UploadFlushResponse::DISCARDED);
-  EXPECT_TRUE(response.stop());
+  ASSERT_EQ(response.entries_size(), 1);
+  EXPECT_TRUE(response.entries(0).stop());
   {
     auto stub = client();
     grpc::ClientContext context;

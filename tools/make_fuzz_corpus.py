@@ -9,12 +9,16 @@ well-formed ones for the fuzzer to mutate from. Deterministic: run it again and 
 
 import hashlib
 import os
+import re
 import struct
 
 from proto import farm_pb2 as pb
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 CORPUS = os.path.join(ROOT, "fuzz", "corpus")
+# The coordinator's protocol (proto/wire_limits.h), so that hostile registrations get past it.
+PROTOCOL_VERSION = int(re.search(r"kProtocolVersion = (\d+);",
+                                 open(os.path.join(ROOT, "proto", "wire_limits.h")).read()).group(1))
 SHARED = os.path.join(ROOT, "..", "shared")
 
 
@@ -164,7 +168,7 @@ requests = {
     "watch-unknown": request(WATCH, pb.WatchJobRequest(job_id="nope", interval_ms=4000000000).SerializeToString()),
     "register-wrong-protocol": request(REGISTER, pb.RegisterWorkerRequest(protocol_version=1, threads=1).SerializeToString()),
     "register-absurd": request(REGISTER, pb.RegisterWorkerRequest(
-        protocol_version=5, threads=-7, capabilities=["pt", "x" * 1000], host="h" * 100000).SerializeToString()),
+        protocol_version=PROTOCOL_VERSION, threads=-7, capabilities=["pt", "x" * 1000], host="h" * 100000).SerializeToString()),
     "lease-unknown-worker": request(LEASE, pb.LeaseChainsRequest(worker_id="worker-x", max_chains=4).SerializeToString()),
     "lease-real": request(LEASE, pb.LeaseChainsRequest(worker_id="WKR0", max_chains=-5, wait_ms=-1).SerializeToString()),
     "lease-huge": request(LEASE, pb.LeaseChainsRequest(worker_id="WKR0", max_chains=2**31 - 1, wait_ms=2**31 - 1).SerializeToString()),
@@ -176,9 +180,11 @@ requests = {
 
 
 def flush(splats, width=8, height=8, checksum=None, **fields):
-    h = pb.FlushHeader(worker_id="WKR0", job_id="JOB0", chain_index=0, flush_index=0, epoch=1,
-                       mutations=64, width=width, height=height, splat_bytes=len(splats),
-                       checksum=checksum if checksum is not None else sha(splats), **fields)
+    h = pb.FlushHeader(worker_id="WKR0", job_id="JOB0", width=width, height=height,
+                       splat_bytes=len(splats),
+                       checksum=checksum if checksum is not None else sha(splats),
+                       entries=[pb.FlushEntry(chain_index=0, flush_index=0, epoch=1, mutations=64)],
+                       **fields)
     return request(UPLOAD, stream(pb.UploadFlushRequest(header=h), pb.UploadFlushRequest(splats=splats)))
 
 
@@ -201,7 +207,7 @@ requests.update({
         worker_id="WKR0", job_id="job-000000000000", width=8, height=8, splat_bytes=0)))),
     "flush-batch-absurd": request(UPLOAD, stream(pb.UploadFlushRequest(header=pb.FlushHeader(
         worker_id="WKR0", job_id="JOB0", width=8, height=8, splat_bytes=len(dense),
-        checksum=sha(dense), entries=[pb.BatchEntry(chain_index=i, epoch=1) for i in range(5000)])),
+        checksum=sha(dense), entries=[pb.FlushEntry(chain_index=i, epoch=1) for i in range(5000)])),
         pb.UploadFlushRequest(splats=dense))),
 })
 for name, data in requests.items():

@@ -186,7 +186,7 @@ struct RemoteChainSource::Impl {
         " files)");
   }
 
-  FlushReceipt uploadSingle(const LeasedChain& chain, const ChainFlush& flush);
+  FlushReceipt uploadSingle(const LeasedChain& chain, ChainFlush&& flush);
   std::vector<BatchAnswer> sendBatch(const std::vector<BatchItem*>& items);
   // Uploads until it is answered, retrying what can be retried; throws when it cannot.
   void deliver(const LeasedChain& chain, const ChainFlush& flush,
@@ -194,8 +194,8 @@ struct RemoteChainSource::Impl {
                const std::string& checksum, const std::string& what,
                v1::UploadFlushResponse* response);
 
-  // One attempt at uploading a flush (`items` empty) or a batch of them (`flush` then holds the
-  // summed film only).
+  // One attempt at uploading the flushes of `items` (one or more chains'), their film encoded in
+  // `splats`; `flush` gives the film's size.
   grpc::Status uploadOnce(const std::string& id, const LeasedChain& chain, const ChainFlush& flush,
                           const std::vector<BatchItem*>& items, const EncodedSplats& splats,
                           const std::string& checksum, v1::UploadFlushResponse* response) {
@@ -208,21 +208,8 @@ struct RemoteChainSource::Impl {
     header->set_job_id(chain.jobId);
     for (const BatchItem* item : items)
       toProto(item->flush, item->chain->epoch, header->add_entries());
-    header->set_chain_index(flush.chainIndex);
-    header->set_flush_index(flush.flushIndex);
-    header->set_epoch(chain.epoch);
-    header->set_mutations(flush.mutations);
     header->set_width(flush.width);
     header->set_height(flush.height);
-    header->set_rejected_splats(flush.rejected.total());
-    header->set_rejected_nan(flush.rejected.nan);
-    header->set_rejected_infinite(flush.rejected.infinite);
-    header->set_rejected_negative(flush.rejected.negative);
-    header->set_rays(flush.rays);
-    header->set_state(flush.state);
-    header->set_finished(flush.finished);
-    for (const MutationTally& t : flush.tallies) toProto(t, header->add_tallies());
-    if (flush.largeSteps.count != 0) toProto(flush.largeSteps, header->mutable_large_steps());
     header->set_splat_bytes(splats.bytes.size());
     header->set_sparse(splats.sparse);
     header->set_compressed(splats.compressed);
@@ -330,7 +317,7 @@ std::shared_ptr<const RenderJob> RemoteChainSource::renderJob(const LeasedChain&
 
 FlushReceipt RemoteChainSource::upload(const LeasedChain& chain, ChainFlush&& flush) {
   if (impl_->batcher) return impl_->batcher->upload(chain, std::move(flush));
-  return impl_->uploadSingle(chain, flush);
+  return impl_->uploadSingle(chain, std::move(flush));
 }
 
 FlushBatcher::Stats RemoteChainSource::batchStats() const {
@@ -356,52 +343,46 @@ FlushReceipt receiptFrom(v1::UploadFlushResponse::Result result, bool stop,
 
 }  // namespace
 
-FlushReceipt RemoteChainSource::Impl::uploadSingle(const LeasedChain& chain,
-                                                   const ChainFlush& flush) {
-  // Encoded once, sent as often as it takes.
-  const EncodedSplats splats = encodeSplats(flush.splats);
-  Sha256 digest;
-  digest.update(splats.bytes);
-  digest.update(flush.state);
-  const std::string checksum = digest.hexDigest();
-  v1::UploadFlushResponse response;
-  deliver(chain, flush, {}, splats, checksum,
-          "flush " + std::to_string(flush.flushIndex) + " of chain " +
-              std::to_string(flush.chainIndex) + " of " + chain.jobId,
-          &response);
-  return receiptFrom(response.result(), response.stop(), response.reason(), response.yielded());
+FlushReceipt RemoteChainSource::Impl::uploadSingle(const LeasedChain& chain, ChainFlush&& flush) {
+  BatchItem item;  // a single flush is a batch of one
+  item.chain = &chain;
+  item.flush = std::move(flush);
+  const BatchAnswer answer = sendBatch({&item}).front();
+  if (answer.kind == BatchAnswer::Kind::kReceipt) return answer.receipt;
+  throw std::runtime_error(answer.kind == BatchAnswer::Kind::kError
+                               ? answer.error
+                               : "the coordinator held back a batch of one flush of " +
+                                     chain.jobId + " for its own sake");
 }
 
 std::vector<BatchAnswer> RemoteChainSource::Impl::sendBatch(const std::vector<BatchItem*>& items) {
-  if (items.size() == 1) {
-    BatchAnswer answer;
-    answer.kind = BatchAnswer::Kind::kReceipt;
-    answer.receipt = uploadSingle(*items[0]->chain, items[0]->flush);
-    return {answer};
-  }
-  // The films summed in double, sent in float as a single flush's is.
+  // The films summed in double, sent in float as each chain's is (one alone goes as it is).
   const ChainFlush& first = items.front()->flush;
-  std::vector<double> sum(first.splats.size(), 0.0);
-  for (const BatchItem* item : items) {
-    if (item->flush.splats.size() != sum.size()) {
-      throw std::runtime_error("the flushes of one job differ in film size");
-    }
-    for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(item->flush.splats[i]);
-  }
-  ChainFlush film;
+  ChainFlush film;  // its size; its splats when there is a sum to hold
   film.width = first.width;
   film.height = first.height;
-  film.splats.assign(sum.begin(), sum.end());
-  const EncodedSplats splats = encodeSplats(film.splats);
+  if (items.size() > 1) {
+    std::vector<double> sum(first.splats.size(), 0.0);
+    for (const BatchItem* item : items) {
+      if (item->flush.splats.size() != sum.size()) {
+        throw std::runtime_error("the flushes of one job differ in film size");
+      }
+      for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(item->flush.splats[i]);
+    }
+    film.splats.assign(sum.begin(), sum.end());
+  }
+  const EncodedSplats splats = encodeSplats(items.size() == 1 ? first.splats : film.splats);
   Sha256 digest;
   digest.update(splats.bytes);
   for (const BatchItem* item : items) digest.update(item->flush.state);
   const std::string checksum = digest.hexDigest();
   v1::UploadFlushResponse response;
-  deliver(
-      *items.front()->chain, film, items, splats, checksum,
-      "a batch of " + std::to_string(items.size()) + " flushes of " + items.front()->chain->jobId,
-      &response);
+  const std::string what = items.size() == 1 ? "flush " + std::to_string(first.flushIndex) +
+                                                   " of chain " + std::to_string(first.chainIndex) +
+                                                   " of " + items[0]->chain->jobId
+                                             : "a batch of " + std::to_string(items.size()) +
+                                                   " flushes of " + items.front()->chain->jobId;
+  deliver(*items.front()->chain, film, items, splats, checksum, what, &response);
   if (response.entries_size() != int(items.size())) {
     throw std::runtime_error("the coordinator answered " + std::to_string(response.entries_size()) +
                              " of a batch of " + std::to_string(items.size()) + " flushes");
