@@ -11,8 +11,6 @@
 #include <functional>
 #include <set>
 
-#include "proto/convert.h"
-#include "proto/coordinator_store.pb.h"
 #include "proto/splat_codec.h"
 #include "proto/zstd_frame.h"
 
@@ -104,128 +102,6 @@ std::string compressVector(const std::vector<T>& values) {
   return zstdCompress(values.data(), values.size() * sizeof(T));
 }
 
-int phaseCode(JobPhase phase) {
-  switch (phase) {
-    case JobPhase::kSubmitted:
-    case JobPhase::kLoadingScene:
-    case JobPhase::kBootstrapping:
-      return 1;  // prepared again after a restart
-    case JobPhase::kRendering:
-    case JobPhase::kFinishing:
-      return 2;  // resumed from the log
-    case JobPhase::kDone:
-      return 3;
-    case JobPhase::kFailed:
-      return 4;
-    case JobPhase::kCancelled:
-      return 5;
-  }
-  return 1;
-}
-
-bool phaseFromCode(int64_t code, JobPhase* phase) {
-  switch (code) {
-    case 1:
-      *phase = JobPhase::kSubmitted;
-      return true;
-    case 2:
-      *phase = JobPhase::kRendering;
-      return true;
-    case 3:
-      *phase = JobPhase::kDone;
-      return true;
-    case 4:
-      *phase = JobPhase::kFailed;
-      return true;
-    case 5:
-      *phase = JobPhase::kCancelled;
-      return true;
-  }
-  return false;
-}
-
-std::string encodeSpec(const JobSpec& spec) {
-  store::v1::JobRecord r;
-  *r.mutable_settings() = toProto(spec.settings);
-  r.set_scene_path(spec.scenePath);
-  r.set_reference_path(spec.referencePath);
-  r.set_name(spec.name);
-  r.set_bundle_hash(spec.bundleHash);
-  r.set_bundle_scene_path(spec.bundleScenePath);
-  r.set_bundle_root(spec.bundleRoot);
-  return r.SerializeAsString();
-}
-
-bool decodeSpec(const std::string& bytes, JobSpec* spec, std::string* error) {
-  store::v1::JobRecord r;
-  if (!r.ParseFromString(bytes)) {
-    *error = "unreadable job record";
-    return false;
-  }
-  if (!fromProto(r.settings(), &spec->settings, error)) return false;
-  spec->scenePath = r.scene_path();
-  spec->referencePath = r.reference_path();
-  spec->name = r.name();
-  spec->bundleHash = r.bundle_hash();
-  spec->bundleScenePath = r.bundle_scene_path();
-  spec->bundleRoot = r.bundle_root();
-  return true;
-}
-
-std::string encodePlan(const JobPlan& plan) {
-  store::v1::PlanRecord r;
-  r.set_normalization(plan.bootstrap.normalization);
-  r.set_normalization_std_error(plan.bootstrap.normalizationStdError);
-  r.set_candidates(plan.bootstrap.candidates);
-  r.set_non_zero_candidates(plan.bootstrap.nonZeroCandidates);
-  r.set_bootstrap_seconds(plan.bootstrap.seconds);
-  r.set_abandoned_connections(plan.bootstrap.abandonedConnections);
-  for (const ChainSpec& chain : plan.chains) *r.add_chains() = toProto(chain);
-  r.set_planned_work(plan.plannedWork);
-  r.set_width(plan.width);
-  r.set_height(plan.height);
-  r.set_load_seconds(plan.loadSeconds);
-  for (const std::string& w : plan.warnings) r.add_warnings(w);
-  for (const std::string& line : plan.renderPlan) r.add_render_plan(line);
-  if (plan.plannedSettings) *r.mutable_planned_settings() = toProto(*plan.plannedSettings);
-  return r.SerializeAsString();
-}
-
-bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
-  store::v1::PlanRecord r;
-  if (!r.ParseFromString(bytes)) {
-    *error = "unreadable plan record";
-    return false;
-  }
-  plan->bootstrap.normalization = r.normalization();
-  plan->bootstrap.normalizationStdError = r.normalization_std_error();
-  plan->bootstrap.candidates = r.candidates();
-  plan->bootstrap.nonZeroCandidates = r.non_zero_candidates();
-  plan->bootstrap.seconds = r.bootstrap_seconds();
-  plan->bootstrap.abandonedConnections = r.abandoned_connections();
-  for (const v1::ChainSpec& c : r.chains()) {
-    ChainSpec chain;
-    if (!fromProto(c, &chain, error)) return false;
-    plan->chains.push_back(std::move(chain));
-  }
-  plan->plannedWork = r.planned_work();
-  plan->width = r.width();
-  plan->height = r.height();
-  if (plan->width <= 0 || plan->height <= 0) {
-    *error = "plan record with an empty film";
-    return false;
-  }
-  plan->loadSeconds = r.load_seconds();
-  plan->warnings.assign(r.warnings().begin(), r.warnings().end());
-  plan->renderPlan.assign(r.render_plan().begin(), r.render_plan().end());
-  if (r.has_planned_settings()) {
-    RenderSettings settings;
-    if (!fromProto(r.planned_settings(), &settings, error)) return false;
-    plan->plannedSettings = settings;
-  }
-  return true;
-}
-
 // Whether a job id can name files in DIR/logs (its log and its checkpoint films).
 bool namesAFile(const std::string& id) {
   return !id.empty() && id.find('/') == std::string::npos && id.find("..") == std::string::npos;
@@ -239,164 +115,6 @@ bool writeFully(int fd, const std::string& bytes, uint64_t offset) {
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return false;
     done += size_t(n);
-  }
-  return true;
-}
-
-// A flush's place, counts and state (everything but its film).
-void encodeEntry(const ChainFlush& flush, store::v1::FlushRecord* r) {
-  r->set_chain_index(flush.chainIndex);
-  r->set_flush_index(flush.flushIndex);
-  r->set_mutations(flush.mutations);
-  r->set_rejected_nan(flush.rejected.nan);
-  r->set_rejected_infinite(flush.rejected.infinite);
-  r->set_rejected_negative(flush.rejected.negative);
-  r->set_rays(flush.rays);
-  r->set_state(flush.state);
-  for (const MutationTally& t : flush.tallies) toProto(t, r->add_tallies());
-  if (flush.largeSteps.count != 0) toProto(flush.largeSteps, r->mutable_large_steps());
-  r->set_finished(flush.finished);
-}
-
-ChainFlush decodeEntry(const store::v1::FlushRecord& r) {
-  ChainFlush flush;
-  flush.chainIndex = r.chain_index();
-  flush.flushIndex = r.flush_index();
-  flush.mutations = r.mutations();
-  flush.rejected.nan = r.rejected_nan();
-  flush.rejected.infinite = r.rejected_infinite();
-  flush.rejected.negative = r.rejected_negative();
-  flush.rays = r.rays();
-  flush.state = r.state();
-  for (const v1::MutationTally& t : r.tallies()) flush.tallies.push_back(fromProto(t));
-  flush.largeSteps = largeStepsFromProto(r.large_steps());
-  flush.finished = r.finished();
-  return flush;
-}
-
-// A record's film (`film`'s width, height and splats), as it travels (proto/splat_codec.h).
-void encodeFilm(const ChainFlush& film, const EncodedSplats* wire, store::v1::FlushRecord* r) {
-  r->set_width(film.width);
-  r->set_height(film.height);
-  EncodedSplats encoded;
-  if (!wire) encoded = encodeSplats(film.splats);
-  const EncodedSplats& splats = wire ? *wire : encoded;
-  r->set_splats(splats.bytes);
-  r->set_sparse(splats.sparse);
-  r->set_compressed(splats.compressed);
-  r->set_raw_splat_bytes(splats.rawBytes);
-}
-
-// A batch: its film, and each entry as a record of its own without one.
-std::string encodeBatch(const FlushBatch& batch, const EncodedSplats* wire) {
-  store::v1::FlushRecord r;
-  encodeFilm(batch.film, wire, &r);
-  for (const ChainFlush& entry : batch.entries) encodeEntry(entry, r.add_entries());
-  return r.SerializeAsString();
-}
-
-// Either kind of record as a batch (a single flush: a batch of one).
-bool decodeRecord(const std::string& bytes, FlushBatch* batch, std::string* error) {
-  store::v1::FlushRecord r;
-  if (!r.ParseFromString(bytes) || r.width() <= 0 || r.height() <= 0) {
-    *error = "unreadable flush record";
-    return false;
-  }
-  if (r.entries().empty()) {
-    batch->entries.push_back(decodeEntry(r));
-  } else {
-    for (const store::v1::FlushRecord& e : r.entries()) batch->entries.push_back(decodeEntry(e));
-  }
-  batch->epochs.assign(batch->entries.size(), 0);
-  ChainFlush& film = batch->film;
-  film.width = r.width();
-  film.height = r.height();
-  EncodedSplats splats;
-  splats.bytes = r.splats();
-  splats.sparse = r.sparse();
-  splats.compressed = r.compressed();
-  splats.rawBytes = r.raw_splat_bytes();
-  std::string problem;
-  if (!decodeSplats(splats, size_t(r.width()) * size_t(r.height()) * 3, &film.splats, &problem)) {
-    *error = "the record of flush " + std::to_string(batch->entries.front().flushIndex) +
-             " of chain " + std::to_string(batch->entries.front().chainIndex) + ": " + problem;
-    return false;
-  }
-  return true;
-}
-
-// The counts and resume points; the film goes to `sumsFile` (beside the database) when named.
-std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
-                             const std::vector<ChainScheduler::ChainSnapshot>& chains,
-                             const std::string& sumsFile = "") {
-  store::v1::CheckpointRecord r;
-  r.set_sums_file(sumsFile);
-  r.set_work_done(s.workDone);
-  r.set_rejected_nan(s.rejected.nan);
-  r.set_rejected_infinite(s.rejected.infinite);
-  r.set_rejected_negative(s.rejected.negative);
-  r.set_rays(s.rays);
-  r.set_accepted_flushes(s.acceptedFlushes);
-  for (int64_t w : s.groupWork) r.add_group_work(w);
-  for (const MutationTally& t : s.tallies) toProto(t, r.add_tallies());
-  if (s.largeSteps.count != 0) toProto(s.largeSteps, r.mutable_large_steps());
-  for (size_t i = 0; i < chains.size(); ++i) {
-    store::v1::ChainRecord* c = r.add_chains();
-    c->set_resume_state(chains[i].resumeState);
-    c->set_mutations_done(chains[i].mutationsDone);
-    c->set_next_flush_index(chains[i].nextFlushIndex);
-    c->set_finished(chains[i].finished);
-  }
-  return r.SerializeAsString();
-}
-
-// `values` is the films' size (groups*width*height*3), or 0 for the counts a finished job keeps;
-// the films are read from `logDir`/sums_file. *sumsFile: the file the record names ("" for none).
-bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string& logDir,
-                      SplatAggregator::Snapshot* s,
-                      std::vector<ChainScheduler::ChainSnapshot>* chains, std::string* sumsFile,
-                      std::string* error) {
-  store::v1::CheckpointRecord r;
-  if (!r.ParseFromString(bytes)) {
-    *error = "unreadable checkpoint record";
-    return false;
-  }
-  *sumsFile = r.sums_file();
-  if (sumsFile->find('/') != std::string::npos) {
-    *error = "a checkpoint names the file '" + *sumsFile + "'";
-    return false;
-  }
-  s->sums.assign(values, 0.0);
-  if (values > 0) {
-    std::string frame = r.sums_zstd();
-    if (!sumsFile->empty()) {
-      const std::string path = (fs::path(logDir) / *sumsFile).string();
-      std::ifstream in(path, std::ios::binary);
-      frame.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-      if (!in.good() && !in.eof()) {
-        *error = "cannot read the checkpoint's film " + path;
-        return false;
-      }
-    }
-    if (!zstdDecompressExact(frame, s->sums.data(), values * sizeof(double))) {
-      *error = "the checkpoint's film " +
-               (sumsFile->empty() ? std::string("in the database") : *sumsFile) +
-               " is missing, corrupt or of another film size";
-      return false;
-    }
-  }
-  s->workDone = r.work_done();
-  s->rejected.nan = r.rejected_nan();
-  s->rejected.infinite = r.rejected_infinite();
-  s->rejected.negative = r.rejected_negative();
-  s->rays = r.rays();
-  s->acceptedFlushes = r.accepted_flushes();
-  s->groupWork.assign(r.group_work().begin(), r.group_work().end());
-  for (const v1::MutationTally& t : r.tallies()) s->tallies.push_back(fromProto(t));
-  s->largeSteps = largeStepsFromProto(r.large_steps());
-  for (const store::v1::ChainRecord& c : r.chains()) {
-    chains->push_back({c.resume_state(), c.mutations_done(), c.next_flush_index(), c.finished()});
-    s->nextFlush.push_back(c.next_flush_index());
   }
   return true;
 }
@@ -542,16 +260,10 @@ Status JobStore::open(const std::string& dir, std::unique_ptr<JobStore>* store) 
 }
 
 Status JobStore::addBundle(const std::string& hash, const BundleManifest& manifest) {
-  v1::BundleManifest m;
-  for (const BundleEntry& e : manifest) {
-    v1::BundleFile* f = m.add_files();
-    f->set_path(e.path);
-    f->set_size(e.size);
-    f->set_hash(e.hash);
-  }
+  const std::string record = store::encodeBundle(manifest);
   std::lock_guard<std::mutex> lock(mutex_);
   Statement q(db_, "INSERT OR IGNORE INTO bundles(hash, manifest) VALUES(?, ?)");
-  if (!q.bind(1, hash).blob(2, m.SerializeAsString()).run()) return fail("cannot add a bundle");
+  if (!q.bind(1, hash).blob(2, record).run()) return fail("cannot add a bundle");
   return Status::ok();
 }
 
@@ -560,13 +272,11 @@ Status JobStore::loadBundles(std::vector<std::pair<std::string, BundleManifest>>
   Statement q(db_, "SELECT hash, manifest FROM bundles");
   int rc;
   while ((rc = q.step()) == SQLITE_ROW) {
-    v1::BundleManifest m;
-    if (!m.ParseFromString(q.bytes(1))) {
+    BundleManifest manifest;
+    if (!store::decodeBundle(q.bytes(1), &manifest)) {
       return Status::internal("coordinator database " + path_ + ": unreadable bundle " +
                               q.bytes(0));
     }
-    BundleManifest manifest;
-    for (const v1::BundleFile& f : m.files()) manifest.push_back({f.path(), f.size(), f.hash()});
     bundles->emplace_back(q.bytes(0), std::move(manifest));
   }
   if (rc != SQLITE_DONE) return fail("cannot read bundles");
@@ -577,8 +287,8 @@ Status JobStore::addJob(const std::string& id, const JobSpec& spec) {
   std::lock_guard<std::mutex> lock(mutex_);
   Statement q(db_, "INSERT INTO jobs(id, spec, phase) VALUES(?, ?, ?)");
   if (!q.bind(1, id)
-           .blob(2, encodeSpec(spec))
-           .bind(3, int64_t(phaseCode(JobPhase::kSubmitted)))
+           .blob(2, store::encodeSpec(spec))
+           .bind(3, int64_t(store::phaseCode(JobPhase::kSubmitted)))
            .run()) {
     return fail("cannot add job " + id);
   }
@@ -592,12 +302,12 @@ Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::stri
     if (!finalCounts->sums.empty()) {
       throw std::invalid_argument("JobStore::setPhase keeps an ended job's counts, not its film");
     }
-    counts = encodeCheckpoint(*finalCounts, {});
+    counts = store::encodeCheckpoint(*finalCounts, {});
   }
   std::lock_guard<std::mutex> lock(mutex_);
   Status st = transaction("cannot record job " + id + " as " + jobPhaseName(phase), [&] {
     if (!Statement(db_, "UPDATE jobs SET phase = ?, error = ?, elapsed = ? WHERE id = ?")
-             .bind(1, int64_t(phaseCode(phase)))
+             .bind(1, int64_t(store::phaseCode(phase)))
              .bind(2, error)
              .bind(3, elapsedSeconds)
              .bind(4, id)
@@ -630,7 +340,7 @@ Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::stri
 }
 
 Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double elapsedSeconds) {
-  const std::string record = encodePlan(plan);
+  const std::string record = store::encodePlan(plan);
   std::lock_guard<std::mutex> lock(mutex_);
   return transaction("cannot record the plan of job " + id, [&] {
     return Statement(db_, "INSERT OR REPLACE INTO plans(job, record) VALUES(?, ?)")
@@ -638,7 +348,7 @@ Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double ela
                .blob(2, record)
                .run() &&
            Statement(db_, "UPDATE jobs SET phase = ?, elapsed = ? WHERE id = ?")
-               .bind(1, int64_t(phaseCode(JobPhase::kRendering)))
+               .bind(1, int64_t(store::phaseCode(JobPhase::kRendering)))
                .bind(2, elapsedSeconds)
                .bind(3, id)
                .run();
@@ -648,7 +358,7 @@ Status JobStore::savePlan(const std::string& id, const JobPlan& plan, double ela
 Status JobStore::appendBatch(const std::string& id, const FlushBatch& batch, double elapsedSeconds,
                              uint64_t* tailBytes, const EncodedSplats* wire) {
   return appendRecord(
-      id, encodeBatch(batch, wire),
+      id, store::encodeBatch(batch, wire),
       "cannot record a batch of " + std::to_string(batch.entries.size()) + " flushes of job " + id,
       elapsedSeconds, tailBytes);
 }
@@ -702,7 +412,7 @@ Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapsh
       id + "." + std::to_string(generation_) + "." + std::to_string(++sumsWritten_) + ".sums";
   const std::string path = (fs::path(logDir_) / name).string();
   if (Status st = writeDurably(path, frame); !st.isOk()) return st;
-  const std::string record = encodeCheckpoint(sums, chains, name);
+  const std::string record = store::encodeCheckpoint(sums, chains, name);
   Status st = transaction("cannot checkpoint job " + id, [&] {
     return Statement(db_, "INSERT OR REPLACE INTO checkpoints(job, record) VALUES(?, ?)")
                .bind(1, id)
@@ -778,13 +488,13 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
       return Status(StatusCode::kDataLoss,
                     "coordinator database " + path_ + ": job " + job.id + ": " + what);
     };
-    if (!decodeSpec(q.bytes(1), &job.spec, &problem)) return corrupt(problem);
-    if (!phaseFromCode(q.integer(2), &job.phase)) return corrupt("unknown phase");
+    if (!store::decodeSpec(q.bytes(1), &job.spec, &problem)) return corrupt(problem);
+    if (!store::phaseFromCode(q.integer(2), &job.phase)) return corrupt("unknown phase");
     job.error = q.bytes(3);
     job.elapsedSeconds = q.real(4);
     if (!q.isNull(5)) {
       JobPlan plan;
-      if (!decodePlan(q.bytes(5), &plan, &problem)) return corrupt(problem);
+      if (!store::decodePlan(q.bytes(5), &plan, &problem)) return corrupt(problem);
       job.plan = std::move(plan);
     }
     if (job.phase == JobPhase::kRendering && !job.plan) return corrupt("rendering without a plan");
@@ -796,8 +506,8 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
               : 0;
       SplatAggregator::Snapshot snapshot;
       std::string sumsFile;
-      if (!decodeCheckpoint(q.bytes(6), values, logDir_, &snapshot, &job.checkpointChains,
-                            &sumsFile, &problem)) {
+      if (!store::decodeCheckpoint(q.bytes(6), values, logDir_, &snapshot, &job.checkpointChains,
+                                   &sumsFile, &problem)) {
         return corrupt(problem);
       }
       if (!sumsFile.empty()) sumsFiles_[job.id] = sumsFile;
@@ -822,7 +532,7 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
           return corrupt("the flush log " + logPath(job.id) + " ends before a recorded flush");
         }
         FlushBatch batch;
-        if (!decodeRecord(record, &batch, &problem)) return corrupt(problem);
+        if (!store::decodeRecord(record, &batch, &problem)) return corrupt(problem);
         job.tail.push_back(std::move(batch));
       }
       if (trc != SQLITE_DONE) return fail("cannot read the flushes of job " + job.id);

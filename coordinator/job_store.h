@@ -33,26 +33,13 @@
 #include "coordinator/job.h"
 #include "coordinator/splat_aggregator.h"
 #include "coordinator/status.h"
+#include "coordinator/store_records.h"
 #include "proto/bundle_manifest.h"
 #include "proto/splat_codec.h"
 
 struct sqlite3;
 
 namespace farm {
-
-// What the bootstrap decided, as much of it as a restarted job needs.
-struct JobPlan {
-  BootstrapResult bootstrap;  // the figures only; the seeds travel in the chains
-  std::vector<ChainSpec> chains;
-  int64_t plannedWork = 0;
-  int width = 0, height = 0;
-  double loadSeconds = 0;
-  std::vector<std::string> warnings;
-  std::vector<std::string> renderPlan;  // the plan's lines (RenderPlan::describe)
-  // The settings the plan left the job with (auto's algorithm, mlt's mix); absent in records
-  // from before plans, whose job's own settings hold.
-  std::optional<RenderSettings> plannedSettings;
-};
 
 // A job as the store remembers it.
 struct StoredJob {
