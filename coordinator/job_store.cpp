@@ -23,7 +23,9 @@ namespace {
 // 2: flush records live in DIR/logs/<job>.log; the flushes table holds where.
 // 3: errors.estimated, the error estimated without a reference (a version-2 database is
 //    brought to 3 on opening: its jobs have one error group and no estimate).
-constexpr int64_t kSchemaVersion = 3;
+// 4: flush records hold their flushes as the wire's FlushEntry (coordinator/store_records.h);
+//    a version-3 database is marked 4 on opening, its records of the older forms still read.
+constexpr int64_t kSchemaVersion = 4;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);
@@ -243,6 +245,11 @@ Status JobStore::open(const std::string& dir, std::unique_ptr<JobStore>* store) 
       Statement mark(db, "UPDATE meta SET value = 3 WHERE key = 'schema'");
       if (!column.run() || !mark.run()) return false;
       schema = 3;
+    }
+    if (schema == 3) {
+      Statement mark(db, "UPDATE meta SET value = 4 WHERE key = 'schema'");
+      if (!mark.run()) return false;
+      schema = 4;
     }
     if (schema != kSchemaVersion) return false;
     if (bump.step() != SQLITE_ROW) return false;

@@ -153,22 +153,8 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
 
 namespace {
 
-// A flush's place, counts and state (everything but its film).
-void encodeEntry(const ChainFlush& flush, v1::FlushRecord* r) {
-  r->set_chain_index(flush.chainIndex);
-  r->set_flush_index(flush.flushIndex);
-  r->set_mutations(flush.mutations);
-  r->set_rejected_nan(flush.rejected.nan);
-  r->set_rejected_infinite(flush.rejected.infinite);
-  r->set_rejected_negative(flush.rejected.negative);
-  r->set_rays(flush.rays);
-  r->set_state(flush.state);
-  for (const MutationTally& t : flush.tallies) toProto(t, r->add_tallies());
-  if (flush.largeSteps.count != 0) toProto(flush.largeSteps, r->mutable_large_steps());
-  r->set_finished(flush.finished);
-}
-
-ChainFlush decodeEntry(const v1::FlushRecord& r) {
+// A flush of the records' older forms (schema version 3 and before): see FlushRecord.
+ChainFlush decodeOlderEntry(const v1::FlushRecord& r) {
   ChainFlush flush;
   flush.chainIndex = r.chain_index();
   flush.flushIndex = r.flush_index();
@@ -199,11 +185,11 @@ void encodeFilm(const ChainFlush& film, const EncodedSplats* wire, v1::FlushReco
 
 }  // namespace
 
-// A batch: its film, and each entry as a record of its own without one.
+// A batch: its film, and each entry as it travelled.
 std::string encodeBatch(const FlushBatch& batch, const EncodedSplats* wire) {
   v1::FlushRecord r;
   encodeFilm(batch.film, wire, &r);
-  for (const ChainFlush& entry : batch.entries) encodeEntry(entry, r.add_entries());
+  for (const ChainFlush& entry : batch.entries) toProto(entry, 0, r.add_flushes());
   return r.SerializeAsString();
 }
 
@@ -214,10 +200,12 @@ bool decodeRecord(const std::string& bytes, FlushBatch* batch, std::string* erro
     *error = "unreadable flush record";
     return false;
   }
-  if (r.entries().empty()) {
-    batch->entries.push_back(decodeEntry(r));
+  if (!r.flushes().empty()) {
+    for (const farm::v1::FlushEntry& e : r.flushes()) batch->entries.push_back(fromProto(e));
+  } else if (!r.entries().empty()) {
+    for (const v1::FlushRecord& e : r.entries()) batch->entries.push_back(decodeOlderEntry(e));
   } else {
-    for (const v1::FlushRecord& e : r.entries()) batch->entries.push_back(decodeEntry(e));
+    batch->entries.push_back(decodeOlderEntry(r));
   }
   batch->epochs.assign(batch->entries.size(), 0);
   ChainFlush& film = batch->film;

@@ -46,9 +46,9 @@ std::string encodePlan(const JobPlan& plan);
 bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error);
 
 // One record of the flush log: a batch's film once (as it travelled, `wire`, or encoded from
-// batch.film when null), then each entry without a film. A single flush is a batch of one;
-// records of coordinators before protocol 6 hold a single flush in the record's own fields, and
-// decode as a batch of one too. Decoded batches carry epoch 0 for each entry.
+// batch.film when null), then each entry as it travelled (the wire's FlushEntry). A single flush
+// is a batch of one. Records of schema version 3 and before (FlushRecord's older forms) decode
+// the same way. Decoded batches carry epoch 0 for each entry.
 std::string encodeBatch(const FlushBatch& batch, const EncodedSplats* wire);
 bool decodeRecord(const std::string& bytes, FlushBatch* batch, std::string* error);
 
