@@ -98,6 +98,7 @@ class Job {
   std::vector<WorkerLease> lease(const std::string& worker, int max, SteadyClock::time_point now);
   bool renew(const std::string& worker, uint32_t chain, uint64_t epoch,
              SteadyClock::time_point now);
+  // How a flush counts is in coordinator/flush_acceptance.cpp.
   // Validates and adds a flush. Not-OK statuses are the request's fault (unknown chain, wrong
   // size, out of order, bad values); a duplicate or a flush for a finished job is OK with the ack
   // saying so.
