@@ -18,13 +18,7 @@ Status Job::acceptFlush(const std::string& worker, uint64_t epoch, ChainFlush&& 
   // an entry of a batch is the request's fault here, and says so in its status.
   const std::string name =
       "flush " + std::to_string(flush.flushIndex) + " of chain " + std::to_string(flush.chainIndex);
-  FlushBatch batch;
-  batch.film.width = flush.width;
-  batch.film.height = flush.height;
-  batch.film.splats = std::move(flush.splats);
-  flush.splats.clear();
-  batch.entries.push_back(std::move(flush));
-  batch.epochs.push_back(epoch);
+  FlushBatch batch = FlushBatch::of(std::move(flush), epoch);
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<FlushAck> acks;
   std::vector<FlushOutcome> outcomes;

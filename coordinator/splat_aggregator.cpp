@@ -86,15 +86,19 @@ SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
   return s;
 }
 
+FlushBatch FlushBatch::of(ChainFlush flush, uint64_t epoch) {
+  FlushBatch batch;
+  batch.film.width = flush.width;
+  batch.film.height = flush.height;
+  batch.film.splats = std::move(flush.splats);
+  flush.splats.clear();
+  batch.entries.push_back(std::move(flush));
+  batch.epochs.push_back(epoch);
+  return batch;
+}
+
 FlushOutcome SplatAggregator::add(const ChainFlush& flush, std::string* problem) {
-  FlushBatch one;  // a single flush is a batch of one
-  one.film.width = flush.width;
-  one.film.height = flush.height;
-  one.film.splats = flush.splats;
-  one.entries.push_back(flush);
-  one.entries.back().splats.clear();
-  one.epochs.push_back(0);
-  return addBatch(one, problem);
+  return addBatch(FlushBatch::of(flush, 0), problem);
 }
 
 FlushOutcome SplatAggregator::addBatch(const FlushBatch& batch, std::string* problem) {

@@ -30,6 +30,9 @@ struct FlushBatch {
   ChainFlush film;
   std::vector<ChainFlush> entries;
   std::vector<uint64_t> epochs;  // one per entry
+
+  // A single flush as a batch of one: its splats become the film, the rest its entry.
+  static FlushBatch of(ChainFlush flush, uint64_t epoch);
 };
 
 // What a worker may name in its flushes' tallies: mlt names 13 kinds (its mutations, the manifold

@@ -153,23 +153,6 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
 
 namespace {
 
-// A flush of the records' older forms (schema version 3 and before): see FlushRecord.
-ChainFlush decodeOlderEntry(const v1::FlushRecord& r) {
-  ChainFlush flush;
-  flush.chainIndex = r.chain_index();
-  flush.flushIndex = r.flush_index();
-  flush.mutations = r.mutations();
-  flush.rejected.nan = r.rejected_nan();
-  flush.rejected.infinite = r.rejected_infinite();
-  flush.rejected.negative = r.rejected_negative();
-  flush.rays = r.rays();
-  flush.state = r.state();
-  for (const farm::v1::MutationTally& t : r.tallies()) flush.tallies.push_back(fromProto(t));
-  flush.largeSteps = largeStepsFromProto(r.large_steps());
-  flush.finished = r.finished();
-  return flush;
-}
-
 // A record's film (`film`'s width, height and splats), as it travels (proto/splat_codec.h).
 void encodeFilm(const ChainFlush& film, const EncodedSplats* wire, v1::FlushRecord* r) {
   r->set_width(film.width);
@@ -203,9 +186,10 @@ bool decodeRecord(const std::string& bytes, FlushBatch* batch, std::string* erro
   if (!r.flushes().empty()) {
     for (const farm::v1::FlushEntry& e : r.flushes()) batch->entries.push_back(fromProto(e));
   } else if (!r.entries().empty()) {
-    for (const v1::FlushRecord& e : r.entries()) batch->entries.push_back(decodeOlderEntry(e));
+    // The older forms (schema version 3 and before): see FlushRecord.
+    for (const v1::FlushRecord& e : r.entries()) batch->entries.push_back(chainFlushFrom(e));
   } else {
-    batch->entries.push_back(decodeOlderEntry(r));
+    batch->entries.push_back(chainFlushFrom(r));
   }
   batch->epochs.assign(batch->entries.size(), 0);
   ChainFlush& film = batch->film;

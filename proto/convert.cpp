@@ -309,19 +309,7 @@ LargeStepSums largeStepsFromProto(const v1::LargeStepSums& sums) {
 }
 
 ChainFlush fromProto(const v1::FlushEntry& e) {
-  ChainFlush f;
-  f.chainIndex = e.chain_index();
-  f.flushIndex = e.flush_index();
-  f.mutations = e.mutations();
-  f.rejected.nan = e.rejected_nan();
-  f.rejected.infinite = e.rejected_infinite();
-  f.rejected.negative = e.rejected_negative();
-  f.rays = e.rays();
-  f.state = e.state();
-  f.finished = e.finished();
-  for (const v1::MutationTally& t : e.tallies()) f.tallies.push_back(fromProto(t));
-  f.largeSteps = largeStepsFromProto(e.large_steps());
-  return f;
+  return chainFlushFrom(e);
 }
 
 void toProto(const JobProgress& p, v1::JobProgress* m) {

@@ -30,6 +30,25 @@ void toProto(const MutationTally& tally, v1::MutationTally* out);
 MutationTally fromProto(const v1::MutationTally& tally);
 LargeStepSums largeStepsFromProto(const v1::LargeStepSums& sums);
 ChainFlush fromProto(const v1::FlushEntry& entry);
+// A chain's flush (without its film) from any message that names its fields as FlushEntry does:
+// the wire's entry, and the coordinator store's records of schema version 3 and before
+// (coordinator/store_records.cpp), whose field numbers differ.
+template <class Message>
+ChainFlush chainFlushFrom(const Message& m) {
+  ChainFlush f;
+  f.chainIndex = m.chain_index();
+  f.flushIndex = m.flush_index();
+  f.mutations = m.mutations();
+  f.rejected.nan = m.rejected_nan();
+  f.rejected.infinite = m.rejected_infinite();
+  f.rejected.negative = m.rejected_negative();
+  f.rays = m.rays();
+  f.state = m.state();
+  f.finished = m.finished();
+  for (const v1::MutationTally& t : m.tallies()) f.tallies.push_back(fromProto(t));
+  f.largeSteps = largeStepsFromProto(m.large_steps());
+  return f;
+}
 
 v1::JobPhase toProto(JobPhase phase);
 // PHASE_UNSPECIFIED and values this build does not know read as submitted.
