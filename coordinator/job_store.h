@@ -1,23 +1,18 @@
 #pragma once
 // The durable coordinator's memory (farm-coordinator --data DIR): jobs, their plans, the index
 // of every accepted flush and the error series in one SQLite database (WAL mode, synchronous
-// FULL), the flushes' bytes in an append-only log per job beside it (DIR/logs/<job>.log), so
-// that a coordinator killed at any moment and started again on the same directory resumes every
-// job where its last acknowledged flush left it.
+// FULL; its tables in store_schema.h, its records in store_records.h), the flushes' bytes and
+// the checkpoints' films in files beside it (DIR/logs, flush_log.h), so that a coordinator
+// killed at any moment and started again on the same directory resumes every job where its last
+// acknowledged flush left it.
 //
 // A flush is written (appended to the log and synced, then its row committed) before it is
 // summed and acknowledged: a crash before the commit loses a flush the worker was never told
 // was accepted (it sends it again; the log's bytes past the last row are cut off); a crash after
-// it keeps the flush, and the worker's retry is a duplicate. The log and not a blob column:
-// SQLite writes a blob twice (WAL, then the database) a page at a time, which made a 1080p
-// flush cost 0.6 s of the coordinator's time against 0.16 s in memory (tests/farm_load.cpp). The
-// log of a job's flushes is folded now and then into a checkpoint (the summed film and every
-// chain's resume point) in the same transaction that deletes the folded rows, so a restart reads
-// one checkpoint and replays a bounded tail of the log, never summing a flush twice. The
-// checkpoint's film, 50 MB of doubles at 1080p before compression, is a file of its own beside
-// the log (DIR/logs/<job>.<generation>.<n>.sums), synced before the record that names it
-// commits and removed once another one has; films no record names (a crash between the two)
-// are removed at the next open.
+// it keeps the flush, and the worker's retry is a duplicate. The log of a job's flushes is
+// folded now and then into a checkpoint (the summed film and every chain's resume point) in the
+// same transaction that deletes the folded rows, so a restart reads one checkpoint and replays a
+// bounded tail of the log, never summing a flush twice.
 #include <algorithm>
 #include <cstdint>
 #include <functional>
@@ -30,6 +25,7 @@
 
 #include "common/render/render_job.h"
 #include "coordinator/chain_scheduler.h"
+#include "coordinator/flush_log.h"
 #include "coordinator/job.h"
 #include "coordinator/splat_aggregator.h"
 #include "coordinator/status.h"
@@ -107,20 +103,11 @@ class JobStore {
   Status loadJobs(std::vector<StoredJob>* jobs);
 
  private:
-  // A job's flush log: records appended beside the database, rows in `flushes` saying where.
-  struct FlushLog {
-    int fd = -1;
-    uint64_t end = 0;  // where the next record goes: the end of the last committed one
-  };
   JobStore(sqlite3* db, std::string path, std::string logDir);
-  std::string logPath(const std::string& id) const;
   Status appendRecord(const std::string& id, const std::string& record, const std::string& what,
                       double elapsedSeconds, uint64_t* tailBytes);
-  // `bytes` to `path` in DIR/logs by way of a temporary file, synced, renamed, the directory
-  // synced: all of it or none of it is there after a crash.
-  Status writeDurably(const std::string& path, const std::string& bytes);
-  Status openLogLocked(const std::string& id, FlushLog** log);
-  void resetLogLocked(const std::string& id);
+  // Opens the job's log cut at the end of its last committed record.
+  Status openLogLocked(const std::string& id);
   Status exec(const char* sql);
   // BEGIN IMMEDIATE, `body`, COMMIT; ROLLBACK (and `what` with SQLite's reason) when the body
   // returns false or the commit fails.
@@ -129,11 +116,7 @@ class JobStore {
 
   sqlite3* db_;
   const std::string path_;
-  const std::string logDir_;  // DIR/logs
-  std::map<std::string, FlushLog> logs_;
-  // Each rendering job's checkpoint film, DIR/logs/<job>.<generation>.<n>.sums.
-  std::map<std::string, std::string> sumsFiles_;
-  uint64_t sumsWritten_ = 0;
+  FlushLog log_;  // DIR/logs
   uint64_t generation_ = 0;
   uint64_t checkpointBytes_ = 0;
   std::mutex mutex_;  // one connection, one writer at a time
