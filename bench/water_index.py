@@ -62,13 +62,13 @@ def at_index(index):
                                      f'<float name="intIOR" value="{index}" />')
 
 
-def render(farm, scene, algorithm, seconds, seed, depth, size, image):
+def render(farm, scene, algorithm, seconds, seed, depth, size, image, extra=()):
     if os.path.exists(image):
         return image  # rendered by an earlier run with the same name
     done = subprocess.run([farm, 'render', scene, '--algorithm', algorithm, '--time', str(seconds),
                            '--width', str(size), '--height', str(size), '--shading-normals', 'lax',
                            '--max-depth', str(depth), '--seed', str(seed), '--threads', '2',
-                           '-o', image], capture_output=True, text=True)
+                           *extra, '-o', image], capture_output=True, text=True)
     if done.returncode != 0:
         raise SystemExit(f'{image}: {done.stderr.strip()[-400:]}')
     with open(os.path.splitext(image)[0] + '.log', 'w') as log:  # the report: Z, walks lost, ...
