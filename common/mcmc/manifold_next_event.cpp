@@ -62,12 +62,23 @@ bool ManifoldNextEvent::covers(const Path& x) const {
   for (int i = 1; i <= j; ++i) {
     if (!scene_.smoothSpecularShape(x[i].shape)) return false;
   }
-  // Through one specular vertex, always; through more, only where the diffuse vertex is seen
-  // through a specular one too (L S S D S ..), which BDPT builds only by hitting the light: where
-  // it is seen from a diffuse vertex or the camera, BDPT's light subpaths join it well, while
-  // the trials of a chain of several vertices (its solutions' basins small, near a caustic)
-  // make this estimator noisy.
-  return j == 1 || x.isSpecular(scene_, j + 2);
+  // Through one refraction, always; otherwise (a reflection, or several specular vertices) only
+  // where the diffuse vertex is seen through a specular one too (L S D S .., L S S D S ..), which
+  // BDPT builds only by hitting the light. Where it is seen from a diffuse vertex or the camera,
+  // BDPT's light subpaths join it well, while this estimator is noisy there: the trials of a
+  // chain of several vertices (its solutions' basins small, near a caustic), and a curved
+  // mirror's reflections of the light, whose value 1 / |det| grows without bound at the folds of
+  // the caustic it throws (the water's reflections on the walls at index 4 were two thirds of Z's
+  // variance, against a sixth of Z; docs/specular.md). A refraction into water or glass bends
+  // light towards the normal and spreads what a light sends through it evenly (the floor under
+  // the water, lit through its surface), where this estimator's next event beats BDPT's light
+  // subpaths.
+  if (j == 1) {
+    const Vec3f n = x[1].n;  // either side: only whether x_0 and x_2 lie on the same one counts
+    const bool reflected = (dot(x[0].p - x[1].p, n) > 0) == (dot(x[2].p - x[1].p, n) > 0);
+    if (!reflected) return true;
+  }
+  return x.isSpecular(scene_, j + 2);
 }
 
 bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool severalAllowed,

@@ -21,7 +21,8 @@
 //
 // The paths it estimates (covers()) are those whose x_1 .. x_j are specular and x_{j+1} a
 // non-specular surface, from a light at a finite point, at every length the depth allows: with
-// j = 1 all of them, with j = 2 .. 4 those whose x_{j+2} is specular too (seen through glass or
+// j = 1 all those whose x_1 refracts, with j = 2 .. 4 (or j = 1 by a reflection) those whose
+// x_{j+2} is specular too (seen through glass or
 // water, which BDPT reaches only by hitting the light: under a light a few millimetres wide,
 // practically never, so that leaving them to BDPT, or the paths longer than 10 edges, cost the
 // water caustic at index 1.0001 0.8% of Z), and only over smooth specular shapes
