@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "common/scene/loaders/image_reader.h"
-#include "common/scene/loaders/pbrt_tokenizer.h"
+#include "common/scene/loaders/pbrt_parser.h"
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/vdb_reader.h"
 #include "common/scene/medium.h"
@@ -22,7 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kMaxIncludeDepth = 16;
 constexpr int kDiskSegments = 1024;  // area deficit (2 pi / n)^2 / 6 = 6e-6 of the disk's
 
 // Complex indices of refraction of pbrt-v4's named metal spectra ("metal-Au-eta"), as RGB:
@@ -63,42 +62,6 @@ double roughnessToAlphaV3(double roughness) {
          0.000640711 * x * x * x * x;
 }
 
-// One "type name" value parameter of a directive.
-struct Param {
-  std::string type, name;
-  std::vector<double> numbers;
-  std::vector<std::string> strings;  // strings, and bools as "true" / "false"
-  int line = 0;
-  bool used = false;
-};
-
-struct ParamList {
-  std::vector<Param> params;
-  Param* find(const std::string& name) {
-    for (Param& p : params)
-      if (p.name == name) {
-        p.used = true;
-        return &p;
-      }
-    return nullptr;
-  }
-  bool has(const std::string& name) const {
-    for (const Param& p : params)
-      if (p.name == name) return true;
-    return false;
-  }
-};
-
-// A directive's words and values, with where it stands.
-struct Directive {
-  std::string name;
-  std::vector<std::string> strings;  // positional strings
-  std::vector<double> numbers;       // positional numbers
-  ParamList params;
-  std::string file;  // for messages: the file as the scene names it
-  int line = 0;
-};
-
 struct AreaLight {
   Spectrum radiance{0.0f};
   bool active = false;
@@ -130,10 +93,9 @@ struct NamedTexture {
 
 constexpr int kMaxTextureDepth = 16;     // nesting of checkerboard and scale textures
 constexpr size_t kMaxTextures = 100000;  // entries in SceneDescription::textures
-constexpr int kMaxIncludedFiles = 1000;  // Include and Import directives in all
 constexpr size_t kMaxGeometryElements = size_t(1) << 28;  // vertices + triangle corners
 
-class PbrtLoader {
+class PbrtLoader : public PbrtTarget {
  public:
   explicit PbrtLoader(const std::string& path) : path_(path) {}
 
@@ -146,8 +108,7 @@ class PbrtLoader {
     scene_.camera.height = 720;
     scene_.camera.filter = FilterType::Box;
     scene_.maxDepth = 6;
-    includeStack_.push_back(fs::absolute(path_).lexically_normal().string());
-    parseFile(text, path_, 0);
+    parsePbrt(path_, text, this);
     // pbrt-v4's default filter is a gaussian of radius 1.5 and sigma 0.5; v3's a box.
     if (sawV4_ && (!sawFilter_ || gaussianDefaults_)) setGaussian(1.5, 2);
     // pbrt-v4's spots fall off by a smoothstep, v3's by the fourth power.
@@ -172,253 +133,36 @@ class PbrtLoader {
   }
 
  private:
-  // ---- Reading directives ----
-
-  void parseFile(const std::string& text, const std::string& file, int depth) {
-    const std::vector<PbrtToken> tokens = tokenizePbrt(text, file);
-    size_t i = 0;
-    while (i < tokens.size()) {
-      const PbrtToken& t = tokens[i];
-      if (t.kind != PbrtToken::Kind::Word)
-        throw SceneLoadError(file, t.line, "expected a directive, found '" + t.text + "'");
-      Directive d;
-      d.name = t.text;
-      d.file = file;
-      d.line = t.line;
-      ++i;
-      readArguments(tokens, &i, &d);
-      if (d.name == "Include" || d.name == "Import") {
-        if (d.name == "Import") sawV4_ = true;
-        if (d.strings.size() != 1) fail(d, d.name + " takes one file name");
-        if (depth + 1 > kMaxIncludeDepth)
-          fail(d, d.name + " nested deeper than " + std::to_string(kMaxIncludeDepth) + " files");
-        if (++includedFiles_ > kMaxIncludedFiles)
-          fail(d, "more than " + std::to_string(kMaxIncludedFiles) + " included files");
-        fs::path included = sceneFilePath(dir_, d.strings[0], "included file", d.file, d.line);
-        const std::string key = fs::absolute(included).lexically_normal().string();
-        if (std::find(includeStack_.begin(), includeStack_.end(), key) != includeStack_.end())
-          fail(d, d.name + " of '" + d.strings[0] + "' includes itself (an include cycle)");
-        includeStack_.push_back(key);
-        parseFile(readSceneFile(included, "'" + d.strings[0] + "'", d.file, d.line),
-                  (dir_ / d.strings[0]).string(), depth + 1);
-        includeStack_.pop_back();
-        continue;
-      }
-      apply(d);
-    }
-  }
-
-  // How many positional words each directive takes before its parameter list (strings) or
-  // how many numbers; -1 for directives that are unknown here.
-  static int positionalStrings(const std::string& name) {
-    static const std::map<std::string, int> counts = {{"Shape", 1},
-                                                      {"Material", 1},
-                                                      {"MakeNamedMaterial", 1},
-                                                      {"NamedMaterial", 1},
-                                                      {"Texture", 3},
-                                                      {"LightSource", 1},
-                                                      {"AreaLightSource", 1},
-                                                      {"Camera", 1},
-                                                      {"Film", 1},
-                                                      {"PixelFilter", 1},
-                                                      {"Sampler", 1},
-                                                      {"Integrator", 1},
-                                                      {"Accelerator", 1},
-                                                      {"Include", 1},
-                                                      {"Import", 1},
-                                                      {"CoordinateSystem", 1},
-                                                      {"CoordSysTransform", 1},
-                                                      {"MakeNamedMedium", 1},
-                                                      {"ObjectBegin", 1},
-                                                      {"ObjectInstance", 1},
-                                                      {"ColorSpace", 1},
-                                                      {"Attribute", 1},
-                                                      {"Option", 0},
-                                                      {"MediumInterface", -2},
-                                                      {"ActiveTransform", -3}};
-    auto it = counts.find(name);
-    return it == counts.end() ? 0 : it->second;
-  }
-
-  void readArguments(const std::vector<PbrtToken>& tokens, size_t* i, Directive* d) {
-    const std::string& name = d->name;
-    auto atEnd = [&] { return *i >= tokens.size(); };
-    int strings = positionalStrings(name);
-    if (strings == -2) {  // MediumInterface: one or two strings
-      while (!atEnd() && tokens[*i].kind == PbrtToken::Kind::String && d->strings.size() < 2)
-        d->strings.push_back(tokens[(*i)++].text);
-      return;
-    }
-    if (strings == -3) {  // ActiveTransform StartTime | EndTime | All
-      if (atEnd() || tokens[*i].kind != PbrtToken::Kind::Word)
-        fail(*d, "ActiveTransform takes StartTime, EndTime or All");
-      d->strings.push_back(tokens[(*i)++].text);
-      return;
-    }
-    for (int k = 0; k < strings; ++k) {
-      if (atEnd() || tokens[*i].kind != PbrtToken::Kind::String)
-        fail(*d, name + " expects " + std::to_string(strings) + " quoted string" +
-                     (strings > 1 ? "s" : "") + " first");
-      d->strings.push_back(tokens[(*i)++].text);
-    }
-    // Bare or bracketed numbers (Translate 1 2 3, Transform [ ... ]).
-    if (!atEnd() && tokens[*i].kind == PbrtToken::Kind::OpenBracket && strings == 0 &&
-        name != "Option") {
-      ++*i;
-      while (!atEnd() && tokens[*i].kind == PbrtToken::Kind::Number)
-        d->numbers.push_back(tokens[(*i)++].number);
-      if (atEnd() || tokens[*i].kind != PbrtToken::Kind::CloseBracket)
-        fail(*d, "expected ']' closing the numbers of " + name);
-      ++*i;
-    }
-    while (!atEnd() && tokens[*i].kind == PbrtToken::Kind::Number)
-      d->numbers.push_back(tokens[(*i)++].number);
-    // The parameter list: "type name" value pairs.
-    std::set<std::string> names;
-    while (!atEnd() && tokens[*i].kind == PbrtToken::Kind::String) {
-      const PbrtToken& decl = tokens[(*i)++];
-      Param p;
-      p.line = decl.line;
-      std::string text = decl.text;
-      size_t a = text.find_first_not_of(" \t");
-      size_t sp = text.find_first_of(" \t", a);
-      size_t b = sp == std::string::npos ? sp : text.find_first_not_of(" \t", sp);
-      if (a == std::string::npos || sp == std::string::npos || b == std::string::npos)
-        throw SceneLoadError(d->file, decl.line,
-                             "'" + text + "' is not a parameter declaration (\"type name\")");
-      p.type = text.substr(a, sp - a);
-      size_t e = text.find_last_not_of(" \t");
-      p.name = text.substr(b, e - b + 1);
-      if (p.name.find_first_of(" \t") != std::string::npos)
-        throw SceneLoadError(d->file, decl.line,
-                             "'" + text + "' is not a parameter declaration (\"type name\")");
-      if (p.type == "point") p.type = "point3";
-      if (p.type == "normal") p.type = "normal3";
-      if (p.type == "vector") p.type = "vector3";
-      if (p.type == "color") p.type = "rgb";
-      auto readValue = [&](const PbrtToken& v) {
-        if (v.kind == PbrtToken::Kind::Number) {
-          p.numbers.push_back(v.number);
-        } else if (v.kind == PbrtToken::Kind::String ||
-                   (v.kind == PbrtToken::Kind::Word && (v.text == "true" || v.text == "false"))) {
-          p.strings.push_back(v.text);
-        } else {
-          throw SceneLoadError(d->file, v.line,
-                               "unexpected '" + v.text + "' in the value of '" + p.name + "'");
-        }
-      };
-      if (atEnd())
-        throw SceneLoadError(d->file, decl.line, "parameter '" + p.name + "' has no value");
-      if (tokens[*i].kind == PbrtToken::Kind::OpenBracket) {
-        ++*i;
-        while (!atEnd() && tokens[*i].kind != PbrtToken::Kind::CloseBracket)
-          readValue(tokens[(*i)++]);
-        if (atEnd())
-          throw SceneLoadError(d->file, decl.line, "expected ']' closing '" + p.name + "'");
-        ++*i;
-      } else {
-        readValue(tokens[(*i)++]);
-      }
-      if (!p.numbers.empty() && !p.strings.empty())
-        throw SceneLoadError(d->file, p.line,
-                             "parameter '" + p.name + "' mixes numbers and strings");
-      if (!names.insert(p.name).second)
-        throw SceneLoadError(d->file, p.line, "parameter '" + p.name + "' given twice");
-      d->params.params.push_back(std::move(p));
-    }
-  }
-
   // ---- Errors ----
 
-  [[noreturn]] void fail(const Directive& d, const std::string& problem) const {
-    throw SceneLoadError(d.file, d.line, problem);
-  }
-  [[noreturn]] void failParam(const Directive& d, const Param& p,
-                              const std::string& problem) const {
-    throw SceneLoadError(d.file, p.line ? p.line : d.line, problem);
-  }
-  // Every parameter not read is an error: unknown ones would otherwise change nothing silently.
-  void rejectUnused(const Directive& d, const std::string& what) const {
-    for (const Param& p : d.params.params)
-      if (!p.used)
-        failParam(d, p, what + ": parameter '" + p.type + " " + p.name + "' is not supported");
-  }
-
-  void warn(const Directive& d, const std::string& what) {
+  void warn(const PbrtDirective& d, const std::string& what) {
     scene_.warnings.push_back(formatLoadMessage(d.file, d.line, what));
   }
 
   // ---- Typed parameter access ----
 
-  Param* typed(Directive& d, const std::string& name, std::initializer_list<const char*> types) {
-    Param* p = d.params.find(name);
-    if (!p) return nullptr;
-    for (const char* t : types)
-      if (p->type == t) return p;
-    std::string allowed;
-    for (const char* t : types) allowed += (allowed.empty() ? "" : " or ") + std::string(t);
-    failParam(d, *p, "parameter '" + name + "' must be of type " + allowed + ", not " + p->type);
-  }
-  double getFloat(Directive& d, const std::string& name, double def) {
-    Param* p = typed(d, name, {"float", "integer"});
-    if (!p) return def;
-    if (p->numbers.size() != 1) failParam(d, *p, "parameter '" + name + "' takes one number");
-    return p->numbers[0];
-  }
-  long long getInt(Directive& d, const std::string& name, long long def) {
-    Param* p = typed(d, name, {"integer"});
-    if (!p) return def;
-    if (p->numbers.size() != 1) failParam(d, *p, "parameter '" + name + "' takes one integer");
-    double v = p->numbers[0];
-    if (v != std::floor(v) || std::fabs(v) > 1e15)
-      failParam(d, *p, "parameter '" + name + "' is not an integer");
-    return (long long)v;
-  }
-  bool getBool(Directive& d, const std::string& name, bool def) {
-    Param* p = typed(d, name, {"bool"});
-    if (!p) return def;
-    if (p->strings.size() != 1 || (p->strings[0] != "true" && p->strings[0] != "false"))
-      failParam(d, *p, "parameter '" + name + "' must be true or false");
-    return p->strings[0] == "true";
-  }
-  std::string getString(Directive& d, const std::string& name, const std::string& def) {
-    Param* p = typed(d, name, {"string"});
-    if (!p) return def;
-    if (p->strings.size() != 1) failParam(d, *p, "parameter '" + name + "' takes one string");
-    return p->strings[0];
-  }
-  std::vector<double> getNumbers(Directive& d, const std::string& name,
-                                 std::initializer_list<const char*> types, size_t multiple) {
-    Param* p = typed(d, name, types);
-    if (!p) return {};
-    if (!p->strings.empty() || p->numbers.size() % multiple != 0)
-      failParam(
-          d, *p,
-          "parameter '" + name + "' needs a multiple of " + std::to_string(multiple) + " numbers");
-    return p->numbers;
-  }
-
   // An RGB (or named metal) spectrum; `isTexture` tells whether a "texture" reference is
   // allowed here (then *texture receives its index and the spectrum is unused).
-  bool getSpectrum(Directive& d, const std::string& name, Spectrum* out, int* texture = nullptr) {
-    Param* p = d.params.find(name);
+  bool getSpectrum(PbrtDirective& d, const std::string& name, Spectrum* out,
+                   int* texture = nullptr) {
+    PbrtParam* p = d.find(name);
     if (!p) return false;
     if (p->type == "texture") {
-      if (!texture) failParam(d, *p, "parameter '" + name + "' cannot be a texture here");
-      if (p->strings.size() != 1) failParam(d, *p, "parameter '" + name + "' names one texture");
+      if (!texture) d.failParam(*p, "parameter '" + name + "' cannot be a texture here");
+      if (p->strings.size() != 1) d.failParam(*p, "parameter '" + name + "' names one texture");
       *texture = useTexture(d, *p, p->strings[0], false);
       return true;
     }
     if (p->type == "rgb") {
-      if (p->numbers.size() != 3) failParam(d, *p, "rgb parameter '" + name + "' takes 3 numbers");
+      if (p->numbers.size() != 3) d.failParam(*p, "rgb parameter '" + name + "' takes 3 numbers");
       for (double v : p->numbers)
-        if (v < 0) failParam(d, *p, "rgb parameter '" + name + "' is negative");
+        if (v < 0) d.failParam(*p, "rgb parameter '" + name + "' is negative");
       *out = Spectrum(float(p->numbers[0]), float(p->numbers[1]), float(p->numbers[2]));
       return true;
     }
     if (p->type == "float") {
-      if (p->numbers.size() != 1) failParam(d, *p, "parameter '" + name + "' takes one number");
-      if (p->numbers[0] < 0) failParam(d, *p, "parameter '" + name + "' is negative");
+      if (p->numbers.size() != 1) d.failParam(*p, "parameter '" + name + "' takes one number");
+      if (p->numbers[0] < 0) d.failParam(*p, "parameter '" + name + "' is negative");
       *out = Spectrum(float(p->numbers[0]));
       return true;
     }
@@ -430,21 +174,27 @@ class PbrtLoader {
           if (s == prefix + "eta") return *out = m.eta, true;
           if (s == prefix + "k") return *out = m.k, true;
         }
-        failParam(d, *p,
-                  "spectrum '" + s +
-                      "' is not supported (named spectra: metal-{Ag,Al,Au,Cu,CuZn,MgO,"
-                      "TiO2}-{eta,k}); give it as rgb");
+        d.failParam(*p, "spectrum '" + s +
+                            "' is not supported (named spectra: metal-{Ag,Al,Au,Cu,CuZn,MgO,"
+                            "TiO2}-{eta,k}); give it as rgb");
       }
-      failParam(d, *p, "sampled spectrum '" + name + "' is not supported: give it as rgb");
+      d.failParam(*p, "sampled spectrum '" + name + "' is not supported: give it as rgb");
     }
     if (p->type == "blackbody")
-      failParam(d, *p, "blackbody spectrum '" + name + "' is not supported: give it as rgb");
-    failParam(d, *p, "parameter '" + name + "' must be an rgb spectrum, not " + p->type);
+      d.failParam(*p, "blackbody spectrum '" + name + "' is not supported: give it as rgb");
+    d.failParam(*p, "parameter '" + name + "' must be an rgb spectrum, not " + p->type);
+  }
+
+  // ---- What the parser hands over ----
+
+  void directive(PbrtDirective& d) override { apply(d); }
+  void included(const PbrtDirective& d) override {
+    if (d.name == "Import") sawV4_ = true;  // pbrt-v4's
   }
 
   // ---- Directives ----
 
-  void apply(Directive& d) {
+  void apply(PbrtDirective& d) {
     const std::string& n = d.name;
     if (n == "Translate" || n == "Scale" || n == "Rotate" || n == "LookAt" || n == "Transform" ||
         n == "ConcatTransform" || n == "Identity" || n == "CoordinateSystem" ||
@@ -471,11 +221,11 @@ class PbrtLoader {
       beforeWorld(d);  // an acceleration structure does not change the picture
     } else if (n == "ColorSpace") {
       if (d.strings[0] != "srgb")
-        fail(d, "color space '" + d.strings[0] + "' is not supported (srgb only)");
+        d.fail("color space '" + d.strings[0] + "' is not supported (srgb only)");
     } else if (n == "Option") {
-      fail(d, "Option is not supported");
+      d.fail("Option is not supported");
     } else if (n == "WorldBegin") {
-      if (sawWorld_) fail(d, "a second WorldBegin");
+      if (sawWorld_) d.fail("a second WorldBegin");
       sawWorld_ = true;
       attrs_.ctm = Matrix4::identity();
       namedCoordinateSystems_["world"] = attrs_.ctm;
@@ -489,14 +239,14 @@ class PbrtLoader {
       attrs_.material = makeMaterial(d, d.strings[0]);
     } else if (n == "MakeNamedMaterial") {
       inWorld(d);
-      std::string type = getString(d, "type", "");
-      if (type.empty()) fail(d, "MakeNamedMaterial '" + d.strings[0] + "' has no \"string type\"");
+      std::string type = d.getString("type", "");
+      if (type.empty()) d.fail("MakeNamedMaterial '" + d.strings[0] + "' has no \"string type\"");
       namedMaterials_[d.strings[0]] = makeMaterial(d, type);
     } else if (n == "NamedMaterial") {
       inWorld(d);
       auto it = namedMaterials_.find(d.strings[0]);
       if (it == namedMaterials_.end())
-        fail(d, "named material '" + d.strings[0] + "' is not defined");
+        d.fail("named material '" + d.strings[0] + "' is not defined");
       attrs_.material = it->second;
     } else if (n == "AreaLightSource") {
       inWorld(d);
@@ -508,18 +258,17 @@ class PbrtLoader {
       inWorld(d);
       parseLightSource(d);
     } else if (n == "MakeNamedMedium") {
-      if (namedMedia_.count(d.strings[0]))
-        fail(d, "medium '" + d.strings[0] + "' is defined twice");
+      if (namedMedia_.count(d.strings[0])) d.fail("medium '" + d.strings[0] + "' is defined twice");
       namedMedia_[d.strings[0]] = makeMedium(d);
     } else if (n == "MediumInterface") {
       // One name: the same medium on both sides; two: inside, then outside.
-      if (d.strings.empty()) fail(d, "MediumInterface names one or two media");
+      if (d.strings.empty()) d.fail("MediumInterface names one or two media");
       attrs_.insideMedium = d.strings[0];
       attrs_.outsideMedium = d.strings.size() > 1 ? d.strings[1] : d.strings[0];
     } else if (n == "ObjectBegin") {
       inWorld(d);
-      if (inObject_) fail(d, "ObjectBegin inside the definition of object '" + objectName_ + "'");
-      if (objects_.count(d.strings[0])) fail(d, "object '" + d.strings[0] + "' is defined twice");
+      if (inObject_) d.fail("ObjectBegin inside the definition of object '" + objectName_ + "'");
+      if (objects_.count(d.strings[0])) d.fail("object '" + d.strings[0] + "' is defined twice");
       // As pbrt: an attribute block around the definition.
       attributeStack_.push_back(attrs_);
       objectBlockDepth_ = attributeStack_.size();
@@ -527,9 +276,9 @@ class PbrtLoader {
       objectName_ = d.strings[0];
       objects_[objectName_];
     } else if (n == "ObjectEnd") {
-      if (!inObject_) fail(d, "ObjectEnd without ObjectBegin");
+      if (!inObject_) d.fail("ObjectEnd without ObjectBegin");
       if (attributeStack_.size() != objectBlockDepth_)
-        fail(d, "ObjectEnd inside an AttributeBegin that the object's definition opened");
+        d.fail("ObjectEnd inside an AttributeBegin that the object's definition opened");
       inObject_ = false;
       attrs_ = attributeStack_.back();
       attributeStack_.pop_back();
@@ -537,23 +286,23 @@ class PbrtLoader {
       inWorld(d);
       instantiate(d);
     } else if (n == "Attribute") {
-      fail(d, "Attribute (default parameters) is not supported");
+      d.fail("Attribute (default parameters) is not supported");
     } else {
-      fail(d, "unknown directive '" + n + "'");
+      d.fail("unknown directive '" + n + "'");
     }
   }
 
-  void beforeWorld(const Directive& d) const {
-    if (sawWorld_) fail(d, d.name + " must come before WorldBegin");
+  void beforeWorld(const PbrtDirective& d) const {
+    if (sawWorld_) d.fail(d.name + " must come before WorldBegin");
   }
-  void inWorld(const Directive& d) const {
-    if (!sawWorld_) fail(d, d.name + " must come after WorldBegin");
+  void inWorld(const PbrtDirective& d) const {
+    if (!sawWorld_) d.fail(d.name + " must come after WorldBegin");
   }
 
-  void needNumbers(const Directive& d, size_t count) const {
+  void needNumbers(const PbrtDirective& d, size_t count) const {
     if (d.numbers.size() != count)
-      fail(d, d.name + " takes " + std::to_string(count) + " numbers, not " +
-                  std::to_string(d.numbers.size()));
+      d.fail(d.name + " takes " + std::to_string(count) + " numbers, not " +
+             std::to_string(d.numbers.size()));
   }
 
   static Vec3f vec(const std::vector<double>& v, size_t at) {
@@ -569,7 +318,7 @@ class PbrtLoader {
     return m;
   }
 
-  void applyTransformDirective(Directive& d) {
+  void applyTransformDirective(PbrtDirective& d) {
     const std::string& n = d.name;
     Matrix4& ctm = attrs_.ctm;
     if (n == "Translate") {
@@ -581,7 +330,7 @@ class PbrtLoader {
     } else if (n == "Rotate") {
       needNumbers(d, 4);
       Vec3f axis = vec(d.numbers, 1);
-      if (!(length(axis) > 0)) fail(d, "Rotate about a zero axis");
+      if (!(length(axis) > 0)) d.fail("Rotate about a zero axis");
       ctm = ctm * Matrix4::rotate(axis, d.numbers[0]);
     } else if (n == "LookAt") {
       needNumbers(d, 9);
@@ -590,7 +339,7 @@ class PbrtLoader {
       Matrix4 cameraToWorld =
           Matrix4::lookAt(vec(d.numbers, 0), vec(d.numbers, 3), vec(d.numbers, 6));
       if (!cameraToWorld.isFinite())
-        fail(d, "LookAt with the up vector along the view direction (or eye at the target)");
+        d.fail("LookAt with the up vector along the view direction (or eye at the target)");
       ctm = ctm * cameraToWorld.inverse();
     } else if (n == "Transform" || n == "ConcatTransform") {
       needNumbers(d, 16);
@@ -603,58 +352,58 @@ class PbrtLoader {
     } else if (n == "CoordSysTransform") {
       auto it = namedCoordinateSystems_.find(d.strings[0]);
       if (it == namedCoordinateSystems_.end())
-        fail(d, "coordinate system '" + d.strings[0] + "' is not defined");
+        d.fail("coordinate system '" + d.strings[0] + "' is not defined");
       ctm = it->second;
     } else if (n == "ReverseOrientation") {
       attrs_.reverseOrientation = !attrs_.reverseOrientation;
     } else if (n == "TransformBegin") {
       transformStack_.push_back(ctm);
     } else if (n == "TransformEnd") {
-      if (transformStack_.empty()) fail(d, "TransformEnd without TransformBegin");
+      if (transformStack_.empty()) d.fail("TransformEnd without TransformBegin");
       ctm = transformStack_.back();
       transformStack_.pop_back();
     } else if (n == "AttributeBegin") {
       attributeStack_.push_back(attrs_);
     } else if (n == "AttributeEnd") {
-      if (attributeStack_.empty()) fail(d, "AttributeEnd without AttributeBegin");
+      if (attributeStack_.empty()) d.fail("AttributeEnd without AttributeBegin");
       if (inObject_ && attributeStack_.size() <= objectBlockDepth_)
-        fail(d, "AttributeEnd would end the definition of object '" + objectName_ +
-                    "' (it needs ObjectEnd)");
+        d.fail("AttributeEnd would end the definition of object '" + objectName_ +
+               "' (it needs ObjectEnd)");
       attrs_ = attributeStack_.back();
       attributeStack_.pop_back();
     } else if (n == "ActiveTransform") {
       if (d.strings[0] != "All")
-        fail(d, "ActiveTransform " + d.strings[0] + ": motion blur is not supported");
+        d.fail("ActiveTransform " + d.strings[0] + ": motion blur is not supported");
     } else {  // TransformTimes
-      fail(d, "TransformTimes: motion blur is not supported");
+      d.fail("TransformTimes: motion blur is not supported");
     }
-    if (!ctm.isFinite()) fail(d, "the transformation is not finite (a zero scale?)");
+    if (!ctm.isFinite()) d.fail("the transformation is not finite (a zero scale?)");
   }
 
   // ---- Camera, film, filter, integrator ----
 
-  void parseCamera(Directive& d) {
-    if (sawCamera_) fail(d, "a second Camera");
+  void parseCamera(PbrtDirective& d) {
+    if (sawCamera_) d.fail("a second Camera");
     sawCamera_ = true;
     // pbrt: the camera sits in the current outside medium.
     cameraMedium_ = attrs_.outsideMedium;
     cameraDirectiveFile_ = d.file;
     cameraDirectiveLine_ = d.line;
     if (d.strings[0] != "perspective")
-      fail(d, "camera '" + d.strings[0] + "' is not supported (perspective only)");
-    double fov = getFloat(d, "fov", 90);
-    if (!(fov > 0 && fov < 180)) fail(d, "fov must be in (0, 180) degrees");
-    double lensRadius = getFloat(d, "lensradius", 0);
-    double focusDistance = getFloat(d, "focaldistance", 1e6);
-    if (!(lensRadius >= 0)) fail(d, "lensradius must be >= 0");
-    if (!(focusDistance > 0)) fail(d, "focaldistance must be > 0");
-    getFloat(d, "shutteropen", 0);
-    getFloat(d, "shutterclose", 1);
-    rejectUnused(d, "Camera");
+      d.fail("camera '" + d.strings[0] + "' is not supported (perspective only)");
+    double fov = d.getFloat("fov", 90);
+    if (!(fov > 0 && fov < 180)) d.fail("fov must be in (0, 180) degrees");
+    double lensRadius = d.getFloat("lensradius", 0);
+    double focusDistance = d.getFloat("focaldistance", 1e6);
+    if (!(lensRadius >= 0)) d.fail("lensradius must be >= 0");
+    if (!(focusDistance > 0)) d.fail("focaldistance must be > 0");
+    d.getFloat("shutteropen", 0);
+    d.getFloat("shutterclose", 1);
+    d.rejectUnused("Camera");
     // The CTM is world-to-camera. pbrt's camera space has +x to the image's right; ours (as
     // Mitsuba's) to the left, hence the mirror.
     const Matrix4 cameraToWorld = attrs_.ctm.inverse();
-    if (!cameraToWorld.isFinite()) fail(d, "the camera transformation is singular");
+    if (!cameraToWorld.isFinite()) d.fail("the camera transformation is singular");
     namedCoordinateSystems_["camera"] = cameraToWorld;
     scene_.camera.toWorld = cameraToWorld * Matrix4::scale(Vec3f(-1, 1, 1));
     // Our camera takes the axes' directions; a shear would be lost, so refuse it.
@@ -665,14 +414,14 @@ class PbrtLoader {
     }
     for (int j = 0; j < 3; ++j)
       if (std::fabs(dot(axes[j], axes[(j + 1) % 3])) > 1e-4f)
-        fail(d, "the camera transformation has a shear");
+        d.fail("the camera transformation has a shear");
     // pbrt scales its rays' directions by it: a non-uniform scale would stretch the view.
     float lengths[3];
     for (int j = 0; j < 3; ++j)
       lengths[j] = length(cameraToWorld.applyVector(Vec3f(j == 0, j == 1, j == 2)));
     if (std::fabs(lengths[0] - lengths[1]) > 1e-4f * lengths[2] ||
         std::fabs(lengths[1] - lengths[2]) > 1e-4f * lengths[2])
-      fail(d, "the camera transformation has a non-uniform scale");
+      d.fail("the camera transformation has a non-uniform scale");
     scene_.camera.fovDegrees = float(fov);
     // Lens radius and focus distance are in camera space: to world units by the (uniform)
     // scale of the camera's transformation.
@@ -682,63 +431,63 @@ class PbrtLoader {
     scene_.camera.fovAxis = FovAxis::Smaller;  // pbrt's fov spans the shorter image axis
   }
 
-  void parseFilm(Directive& d) {
+  void parseFilm(PbrtDirective& d) {
     const std::string& type = d.strings[0];
     if (type != "image" && type != "rgb" && type != "gbuffer")
-      fail(d, "film '" + type + "' is not supported (image, rgb)");
-    long long w = getInt(d, "xresolution", 1280), h = getInt(d, "yresolution", 720);
+      d.fail("film '" + type + "' is not supported (image, rgb)");
+    long long w = d.getInt("xresolution", 1280), h = d.getInt("yresolution", 720);
     if (w < 1 || h < 1 || w > 65536 || h > 65536)
-      fail(d, "film resolution " + std::to_string(w) + "x" + std::to_string(h) +
-                  " is outside 1..65536");
-    if (w * h > (1ll << 28)) fail(d, "film of more than 2^28 pixels");
-    getString(d, "filename", "");  // the farm names its own output
-    rejectUnused(d, "Film");
+      d.fail("film resolution " + std::to_string(w) + "x" + std::to_string(h) +
+             " is outside 1..65536");
+    if (w * h > (1ll << 28)) d.fail("film of more than 2^28 pixels");
+    d.getString("filename", "");  // the farm names its own output
+    d.rejectUnused("Film");
     scene_.camera.width = int(w);
     scene_.camera.height = int(h);
   }
 
-  void parseFilter(Directive& d) {
+  void parseFilter(PbrtDirective& d) {
     sawFilter_ = true;
     const std::string& type = d.strings[0];
     // v3 names the radius "xwidth", v4 "xradius".
     auto radius = [&](const char* axis, double def) {
       std::string v3 = std::string(axis) + "width", v4 = std::string(axis) + "radius";
-      double r = getFloat(d, v3, def);
-      return getFloat(d, v4, r);
+      double r = d.getFloat(v3, def);
+      return d.getFloat(v4, r);
     };
     if (type == "box") {
       double rx = radius("x", 0.5), ry = radius("y", 0.5);
-      if (rx != 0.5 || ry != 0.5) fail(d, "box filter of radius other than 0.5 is not supported");
+      if (rx != 0.5 || ry != 0.5) d.fail("box filter of radius other than 0.5 is not supported");
       scene_.camera.filter = FilterType::Box;
     } else if (type == "triangle") {
       double rx = radius("x", 2), ry = radius("y", 2);
       if (rx != 1 || ry != 1)
-        fail(d, "triangle filter of radius " + std::to_string(rx) + " x " + std::to_string(ry) +
-                    " is not supported (radius 1 only)");
+        d.fail("triangle filter of radius " + std::to_string(rx) + " x " + std::to_string(ry) +
+               " is not supported (radius 1 only)");
       scene_.camera.filter = FilterType::Tent;
     } else if (type == "gaussian") {
       // v3: xwidth (2) and alpha (2); v4: xradius (1.5) and sigma (0.5), alpha = 1 / (2 sigma^2).
-      const bool v4 = d.params.has("xradius") || d.params.has("yradius") || d.params.has("sigma");
+      const bool v4 = d.has("xradius") || d.has("yradius") || d.has("sigma");
       // Without parameters the version decides the radius (v3's 2, v4's 1.5): settled at the
       // end, when the file's materials have told it.
-      gaussianDefaults_ = d.params.params.empty();
+      gaussianDefaults_ = d.params.empty();
       const double rx = radius("x", v4 ? 1.5 : 2), ry = radius("y", v4 ? 1.5 : 2);
-      if (rx != ry) fail(d, "a gaussian filter with different x and y radii is not supported");
+      if (rx != ry) d.fail("a gaussian filter with different x and y radii is not supported");
       // Below half a pixel some film points would reach no pixel centre.
-      if (!(rx >= 0.5 && rx <= 16)) fail(d, "gaussian filter radius must be in [0.5, 16] pixels");
-      double alpha = getFloat(d, "alpha", 2);
-      if (d.params.has("sigma")) {
-        const double sigma = getFloat(d, "sigma", 0.5);
-        if (!(sigma > 0)) fail(d, "gaussian sigma must be > 0");
+      if (!(rx >= 0.5 && rx <= 16)) d.fail("gaussian filter radius must be in [0.5, 16] pixels");
+      double alpha = d.getFloat("alpha", 2);
+      if (d.has("sigma")) {
+        const double sigma = d.getFloat("sigma", 0.5);
+        if (!(sigma > 0)) d.fail("gaussian sigma must be > 0");
         alpha = 1 / (2 * sigma * sigma);
       }
-      if (!(alpha >= 0.01 && alpha <= 100)) fail(d, "gaussian alpha must be in [0.01, 100]");
+      if (!(alpha >= 0.01 && alpha <= 100)) d.fail("gaussian alpha must be in [0.01, 100]");
       setGaussian(rx, alpha);
     } else {
-      fail(d, "pixel filter '" + type +
-                  "' is not supported (box of radius 0.5, triangle of radius 1, gaussian)");
+      d.fail("pixel filter '" + type +
+             "' is not supported (box of radius 0.5, triangle of radius 1, gaussian)");
     }
-    rejectUnused(d, "PixelFilter");
+    d.rejectUnused("PixelFilter");
   }
 
   void setGaussian(double radius, double alpha) {
@@ -747,7 +496,7 @@ class PbrtLoader {
     scene_.camera.filterAlpha = float(alpha);
   }
 
-  void parseIntegrator(Directive& d) {
+  void parseIntegrator(PbrtDirective& d) {
     static const char* const kUnbiased[] = {"path",       "volpath",   "bdpt",
                                             "mlt",        "sppm",      "simplepath",
                                             "randomwalk", "lightpath", "simplevolpath"};
@@ -755,15 +504,15 @@ class PbrtLoader {
     bool ok = false;
     for (const char* t : kUnbiased) ok = ok || type == t;
     if (!ok)
-      fail(d, "integrator '" + type +
-                  "' is not supported: its picture is not the light transport the farm renders");
-    long long depth = getInt(d, "maxdepth", 5);
-    if (depth < 0) fail(d, "maxdepth must be >= 0");
-    if (depth > 100000) fail(d, "maxdepth is absurdly large");
+      d.fail("integrator '" + type +
+             "' is not supported: its picture is not the light transport the farm renders");
+    long long depth = d.getInt("maxdepth", 5);
+    if (depth < 0) d.fail("maxdepth must be >= 0");
+    if (depth > 100000) d.fail("maxdepth is absurdly large");
     // pbrt counts bounces (0: emitted light only); the farm counts edges, as Mitsuba does.
     scene_.maxDepth = int(depth) + 1;
     std::string ignored;
-    for (Param& p : d.params.params)
+    for (PbrtParam& p : d.params)
       if (!p.used) {
         p.used = true;
         ignored += (ignored.empty() ? "" : ", ") + p.name;
@@ -775,10 +524,10 @@ class PbrtLoader {
 
   // ---- Textures ----
 
-  void defineTexture(Directive& d) {
+  void defineTexture(PbrtDirective& d) {
     const std::string& kind = d.strings[1];
     if (kind != "spectrum" && kind != "color" && kind != "float")
-      fail(d, "texture type '" + kind + "' must be spectrum or float");
+      d.fail("texture type '" + kind + "' must be spectrum or float");
     const bool isFloat = kind == "float";
     NamedTexture t;
     // A scene may declare textures it never reads (bump maps, say): what cannot be built is an
@@ -794,16 +543,17 @@ class PbrtLoader {
   }
 
   // The index of named texture `name`, for a parameter `p` of `user`.
-  int useTexture(const Directive& user, const Param& p, const std::string& name, bool isFloat) {
+  int useTexture(const PbrtDirective& user, const PbrtParam& p, const std::string& name,
+                 bool isFloat) {
     auto& table = isFloat ? floatTextures_ : spectrumTextures_;
     auto it = table.find(name);
     if (it == table.end()) {
       auto& other = isFloat ? spectrumTextures_ : floatTextures_;
       if (other.count(name))
-        failParam(user, p,
-                  std::string(isFloat ? "spectrum" : "float") + " texture '" + name +
-                      "' used where a " + (isFloat ? "float" : "spectrum") + " texture is needed");
-      failParam(user, p, "texture '" + name + "' is not defined");
+        user.failParam(p, std::string(isFloat ? "spectrum" : "float") + " texture '" + name +
+                              "' used where a " + (isFloat ? "float" : "spectrum") +
+                              " texture is needed");
+      user.failParam(p, "texture '" + name + "' is not defined");
     }
     if (it->second.index < 0)
       throw SceneLoadError(it->second.errorFile, it->second.errorLine, it->second.error);
@@ -832,11 +582,11 @@ class PbrtLoader {
   }
 
   // A texture argument: a named texture or a value (of type float, rgb or spectrum).
-  int textureArgument(Directive& d, const std::string& name, bool isFloat, float def) {
-    Param* p = d.params.find(name);
+  int textureArgument(PbrtDirective& d, const std::string& name, bool isFloat, float def) {
+    PbrtParam* p = d.find(name);
     if (!p) return constantTexture(Spectrum(def));
     if (p->type == "texture") {
-      if (p->strings.size() != 1) failParam(d, *p, "parameter '" + name + "' names one texture");
+      if (p->strings.size() != 1) d.failParam(*p, "parameter '" + name + "' names one texture");
       return useTexture(d, *p, p->strings[0], isFloat);
     }
     p->used = false;
@@ -845,16 +595,16 @@ class PbrtLoader {
     return constantTexture(v);
   }
 
-  void readMapping(Directive& d, TextureDescription* t) {
-    std::string mapping = getString(d, "mapping", "uv");
-    if (mapping != "uv") fail(d, "texture mapping '" + mapping + "' is not supported (uv only)");
-    t->uScale = float(getFloat(d, "uscale", 1));
-    t->vScale = float(getFloat(d, "vscale", 1));
-    t->uOffset = float(getFloat(d, "udelta", 0));
-    t->vOffset = float(getFloat(d, "vdelta", 0));
+  void readMapping(PbrtDirective& d, TextureDescription* t) {
+    std::string mapping = d.getString("mapping", "uv");
+    if (mapping != "uv") d.fail("texture mapping '" + mapping + "' is not supported (uv only)");
+    t->uScale = float(d.getFloat("uscale", 1));
+    t->vScale = float(d.getFloat("vscale", 1));
+    t->uOffset = float(d.getFloat("udelta", 0));
+    t->vOffset = float(d.getFloat("vdelta", 0));
   }
 
-  int buildTexture(Directive& d, bool isFloat) {
+  int buildTexture(PbrtDirective& d, bool isFloat) {
     const std::string& cls = d.strings[2];
     const std::string what = "texture '" + d.strings[0] + "' (" + cls + ")";
     TextureDescription t;
@@ -862,10 +612,10 @@ class PbrtLoader {
         fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + cls + ")";
     int result;
     if (cls == "imagemap") {
-      if (isFloat) fail(d, "float image textures are not supported (only reflectance is textured)");
-      std::string filename = getString(d, "filename", "");
-      if (filename.empty()) fail(d, what + " has no filename");
-      std::string wrap = getString(d, "wrap", "repeat");
+      if (isFloat) d.fail("float image textures are not supported (only reflectance is textured)");
+      std::string filename = d.getString("filename", "");
+      if (filename.empty()) d.fail(what + " has no filename");
+      std::string wrap = d.getString("wrap", "repeat");
       if (wrap == "repeat")
         t.wrap = TextureWrap::Repeat;
       else if (wrap == "clamp")
@@ -873,31 +623,31 @@ class PbrtLoader {
       else if (wrap == "black")
         t.wrap = TextureWrap::Black;
       else
-        fail(d, "texture wrap '" + wrap + "' is not supported (repeat, clamp, black)");
+        d.fail("texture wrap '" + wrap + "' is not supported (repeat, clamp, black)");
       TextureEncoding encoding = TextureEncoding::Automatic;
-      if (d.params.has("gamma"))
-        encoding = getBool(d, "gamma", false) ? TextureEncoding::SRGB : TextureEncoding::Linear;
-      if (d.params.has("encoding")) {
-        std::string e = getString(d, "encoding", "sRGB");
+      if (d.has("gamma"))
+        encoding = d.getBool("gamma", false) ? TextureEncoding::SRGB : TextureEncoding::Linear;
+      if (d.has("encoding")) {
+        std::string e = d.getString("encoding", "sRGB");
         if (e == "sRGB")
           encoding = TextureEncoding::SRGB;
         else if (e == "linear")
           encoding = TextureEncoding::Linear;
         else
-          fail(d, "texture encoding '" + e + "' is not supported (sRGB, linear)");
+          d.fail("texture encoding '" + e + "' is not supported (sRGB, linear)");
       }
-      if (getBool(d, "invert", false)) fail(d, "inverted image textures are not supported");
-      double scale = getFloat(d, "scale", 1);
-      if (!(scale >= 0)) fail(d, "texture scale must be >= 0");
-      bool trilinear = getBool(d, "trilinear", false);
-      std::string filter = getString(d, "filter", "bilinear");
-      getFloat(d, "maxanisotropy", 8);
+      if (d.getBool("invert", false)) d.fail("inverted image textures are not supported");
+      double scale = d.getFloat("scale", 1);
+      if (!(scale >= 0)) d.fail("texture scale must be >= 0");
+      bool trilinear = d.getBool("trilinear", false);
+      std::string filter = d.getString("filter", "bilinear");
+      d.getFloat("maxanisotropy", 8);
       if (trilinear || (filter != "bilinear" && filter != "point"))
         warn(d, what +
                     ": filtered bilinearly (no MIP map); the pixel filter and the samples "
                     "average the texture over each pixel");
       readMapping(d, &t);
-      rejectUnused(d, what);
+      d.rejectUnused(what);
       t.type = TextureDescription::Type::Image;
       t.image = images_.load(dir_, filename, encoding, d.file, d.line);
       t.origin = fs::path(d.file).filename().string() + ":" + std::to_string(d.line) +
@@ -911,8 +661,8 @@ class PbrtLoader {
         result = addTexture(std::move(s));
       }
     } else if (cls == "checkerboard") {
-      if (getInt(d, "dimension", 2) != 2) fail(d, "3D checkerboards are not supported");
-      std::string aa = getString(d, "aamode", "closedform");
+      if (d.getInt("dimension", 2) != 2) d.fail("3D checkerboards are not supported");
+      std::string aa = d.getString("aamode", "closedform");
       if (aa != "none")
         warn(d, what +
                     ": not antialiased by a closed form; the pixel filter and the samples "
@@ -920,29 +670,29 @@ class PbrtLoader {
       t.tex1 = textureArgument(d, "tex1", isFloat, 1);
       t.tex2 = textureArgument(d, "tex2", isFloat, 0);
       readMapping(d, &t);
-      rejectUnused(d, what);
+      d.rejectUnused(what);
       t.type = TextureDescription::Type::Checkerboard;
       result = addTexture(std::move(t));
     } else if (cls == "scale") {
       // v3: tex1 * tex2; v4: tex * scale (a float).
-      if (d.params.has("tex") || d.params.has("scale")) {
+      if (d.has("tex") || d.has("scale")) {
         t.tex1 = textureArgument(d, "tex", isFloat, 1);
         t.tex2 = textureArgument(d, "scale", true, 1);
       } else {
         t.tex1 = textureArgument(d, "tex1", isFloat, 1);
         t.tex2 = textureArgument(d, "tex2", isFloat, 1);
       }
-      rejectUnused(d, what);
+      d.rejectUnused(what);
       t.type = TextureDescription::Type::Scale;
       result = addTexture(std::move(t));
     } else if (cls == "constant") {
       Spectrum v(1.0f);
       getSpectrum(d, "value", &v);
-      rejectUnused(d, what);
+      d.rejectUnused(what);
       result = constantTexture(v);
     } else {
-      fail(d, "texture class '" + cls +
-                  "' is not supported (imagemap, checkerboard, scale, constant)");
+      d.fail("texture class '" + cls +
+             "' is not supported (imagemap, checkerboard, scale, constant)");
     }
     return result;
   }
@@ -951,17 +701,17 @@ class PbrtLoader {
 
   // Roughness of a (rough) conductor or dielectric as alpha, or 0 for a smooth one. v3's
   // materials remap with a polynomial, v4's with a square root; both have remaproughness.
-  double roughness(Directive& d, bool v4, double def, bool metalV3 = false) {
+  double roughness(PbrtDirective& d, bool v4, double def, bool metalV3 = false) {
     for (const char* name : {"roughness", "uroughness", "vroughness"}) {
-      Param* p = d.params.find(name);
-      if (p && p->type == "texture") failParam(d, *p, "textured roughness is not supported");
+      PbrtParam* p = d.find(name);
+      if (p && p->type == "texture") d.failParam(*p, "textured roughness is not supported");
       if (p) p->used = false;
     }
-    double r = getFloat(d, "roughness", def);
-    double u = getFloat(d, "uroughness", r), v = getFloat(d, "vroughness", r);
-    if (u != v) fail(d, "anisotropic roughness (uroughness != vroughness) is not supported");
-    if (!(u >= 0)) fail(d, "roughness must be >= 0");
-    bool remap = getBool(d, "remaproughness", true);
+    double r = d.getFloat("roughness", def);
+    double u = d.getFloat("uroughness", r), v = d.getFloat("vroughness", r);
+    if (u != v) d.fail("anisotropic roughness (uroughness != vroughness) is not supported");
+    if (!(u >= 0)) d.fail("roughness must be >= 0");
+    bool remap = d.getBool("remaproughness", true);
     double alpha = remap ? (v4 ? std::sqrt(u) : roughnessToAlphaV3(u)) : u;
     // pbrt-v4 renders microfacets of alpha below 1e-3 as smooth. v3 remaps roughness 0 to
     // its clamp 1e-3 (alpha 0.047) for metal, and has a smooth path for glass only.
@@ -971,45 +721,45 @@ class PbrtLoader {
 
   // An index of refraction given as one float (`def` without the parameter); a spectral one is
   // refused.
-  double scalarIndex(Directive& d, const Param* eta, double def) {
+  double scalarIndex(PbrtDirective& d, const PbrtParam* eta, double def) {
     if (!eta) return def;
     if (eta->type != "float" || eta->numbers.size() != 1)
-      failParam(d, *eta,
-                "a dispersive (spectral) index of refraction is not supported: give one float");
+      d.failParam(*eta,
+                  "a dispersive (spectral) index of refraction is not supported: give one float");
     return eta->numbers[0];
   }
 
   // A diffuse reflectance, which may be a texture (`def` where the material does not give it).
-  void readReflectance(Directive& d, const std::string& name, float def, BsdfDescription* b) {
+  void readReflectance(PbrtDirective& d, const std::string& name, float def, BsdfDescription* b) {
     b->reflectance = Spectrum(def);
     int texture = -1;
     getSpectrum(d, name, &b->reflectance, &texture);
     b->reflectanceTexture = texture;
   }
 
-  int makeMaterial(Directive& d, const std::string& type) {
+  int makeMaterial(PbrtDirective& d, const std::string& type) {
     if (type == "" || type == "none" || type == "interface") {
-      getString(d, "type", "");  // MakeNamedMaterial's, read already
-      rejectUnused(d, "material '" + type + "'");
+      d.getString("type", "");  // MakeNamedMaterial's, read already
+      d.rejectUnused("material '" + type + "'");
       return kInterfaceMaterial;
     }
     if (type == "diffuse" || type == "conductor" || type == "dielectric" || type == "coateddiffuse")
       sawV4_ = true;
     const std::string what = "material '" + type + "'";
     for (const char* bump : {"bumpmap", "displacement"})
-      if (d.params.has(bump))
-        failParam(d, *d.params.find(bump), what + ": bump and displacement maps are not supported");
+      if (d.has(bump))
+        d.failParam(*d.find(bump), what + ": bump and displacement maps are not supported");
     BsdfDescription b;
     if (type == "matte" || type == "diffuse") {
       b.type = BsdfDescription::Type::Diffuse;
       b.twoSided = true;  // pbrt's BSDFs scatter on both sides of a surface
       readReflectance(d, type == "matte" ? "Kd" : "reflectance", 0.5f, &b);
-      if (type == "matte" && getFloat(d, "sigma", 0) != 0)
-        fail(d, "Oren-Nayar matte (sigma > 0) is not supported");
+      if (type == "matte" && d.getFloat("sigma", 0) != 0)
+        d.fail("Oren-Nayar matte (sigma > 0) is not supported");
     } else if (type == "metal" || type == "conductor") {
       const bool v4 = type == "conductor";
-      if (v4 && d.params.has("reflectance"))
-        fail(d, "conductor given by reflectance is not supported: give eta and k");
+      if (v4 && d.has("reflectance"))
+        d.fail("conductor given by reflectance is not supported: give eta and k");
       b.eta = kNamedMetals[3].eta;  // copper, both versions' default
       b.k = kNamedMetals[3].k;
       getSpectrum(d, "eta", &b.eta);
@@ -1033,21 +783,21 @@ class PbrtLoader {
       getSpectrum(d, "Kr", &b.specularReflectance);
     } else if (type == "glass" || type == "dielectric") {
       const bool v4 = type == "dielectric";
-      Param* etaParam = d.params.find(v4 ? "eta" : "index");
-      if (!v4 && !etaParam) etaParam = d.params.find("eta");
+      PbrtParam* etaParam = d.find(v4 ? "eta" : "index");
+      if (!v4 && !etaParam) etaParam = d.find("eta");
       const double eta = scalarIndex(d, etaParam, 1.5);
-      if (!(eta > 0) || eta > 100) fail(d, "index of refraction must be in (0, 100]");
+      if (!(eta > 0) || eta > 100) d.fail("index of refraction must be in (0, 100]");
       if (!v4) {
         Spectrum kr(1.0f), kt(1.0f);
         getSpectrum(d, "Kr", &kr);
         getSpectrum(d, "Kt", &kt);
         auto one = [](const Spectrum& v) { return v.x == 1 && v.y == 1 && v.z == 1; };
-        if (!one(kr) || !one(kt)) fail(d, "tinted glass (Kr or Kt other than 1) is not supported");
+        if (!one(kr) || !one(kt)) d.fail("tinted glass (Kr or Kt other than 1) is not supported");
       }
       double alpha = roughness(d, v4, 0.0);
       b.intIOR = float(eta);
       b.extIOR = 1.0f;
-      if (eta == 1) fail(d, "glass of index 1 does not refract; leave the surface out");
+      if (eta == 1) d.fail("glass of index 1 does not refract; leave the surface out");
       if (alpha > 0) {
         b.type = BsdfDescription::Type::RoughDielectric;
         b.distribution = MicrofacetDistribution::GGX;
@@ -1056,7 +806,7 @@ class PbrtLoader {
         b.type = BsdfDescription::Type::Dielectric;
       }
     } else if (type == "" || type == "none" || type == "interface") {
-      fail(d, "material '" + type + "' (a boundary of media only) is not supported");
+      d.fail("material '" + type + "' (a boundary of media only) is not supported");
     } else if (type == "plastic") {
       // pbrt-v3's plastic: Lambertian Kd plus a Trowbridge-Reitz lobe Ks with a dielectric's
       // Fresnel term. pbrt-v3 takes that term from inside the coating (index 1.5 to 1, total
@@ -1067,7 +817,7 @@ class PbrtLoader {
       b.specularReflectance = Spectrum(0.25f);
       getSpectrum(d, "Ks", &b.specularReflectance);
       double alpha = roughness(d, false, 0.1, true);
-      if (!(alpha > 0)) fail(d, "plastic of roughness 0 (without remapping) is not supported");
+      if (!(alpha > 0)) d.fail("plastic of roughness 0 (without remapping) is not supported");
       b.alpha = float(alpha);
       b.distribution = MicrofacetDistribution::GGX;
       b.intIOR = 1.5f;
@@ -1082,17 +832,17 @@ class PbrtLoader {
       b.type = BsdfDescription::Type::CoatedDiffuse;
       b.twoSided = true;
       readReflectance(d, "reflectance", 0.5f, &b);
-      const double eta = scalarIndex(d, d.params.find("eta"), 1.5);
+      const double eta = scalarIndex(d, d.find("eta"), 1.5);
       if (!(eta > 0) || eta > 100 || eta == 1)
-        fail(d, what + ": the coat's index of refraction must be in (0, 100] and not 1");
+        d.fail(what + ": the coat's index of refraction must be in (0, 100] and not 1");
       Spectrum albedo(0.0f);
       getSpectrum(d, "albedo", &albedo);
-      if (!isBlack(albedo)) fail(d, what + ": a scattering coat (albedo > 0) is not supported");
-      getFloat(d, "g", 0);
-      getInt(d, "maxdepth", 10);  // the random walk's: the series here has no end
-      getInt(d, "nsamples", 1);
-      const double thickness = getFloat(d, "thickness", 0.01);
-      if (!(thickness >= 0)) fail(d, what + ": thickness must be >= 0");
+      if (!isBlack(albedo)) d.fail(what + ": a scattering coat (albedo > 0) is not supported");
+      d.getFloat("g", 0);
+      d.getInt("maxdepth", 10);  // the random walk's: the series here has no end
+      d.getInt("nsamples", 1);
+      const double thickness = d.getFloat("thickness", 0.01);
+      if (!(thickness >= 0)) d.fail(what + ": thickness must be >= 0");
       const double alpha = roughness(d, true, 0.0);
       b.distribution = MicrofacetDistribution::GGX;
       b.alpha = alpha > 0 ? float(alpha) : 1e-4f;
@@ -1107,12 +857,12 @@ class PbrtLoader {
                   formatNumber(thickness) + ", does, slightly)" +
                   (alpha > 0 ? "" : "; its smooth coat is a microfacet coat of roughness 1e-4"));
     } else {
-      fail(d, what +
-                  " is not supported (matte/diffuse, metal/conductor, mirror, glass/dielectric, "
-                  "plastic, coateddiffuse)");
+      d.fail(what +
+             " is not supported (matte/diffuse, metal/conductor, mirror, glass/dielectric, "
+             "plastic, coateddiffuse)");
     }
-    getString(d, "type", "");  // MakeNamedMaterial's, read already
-    rejectUnused(d, what);
+    d.getString("type", "");  // MakeNamedMaterial's, read already
+    d.rejectUnused(what);
     scene_.bsdfs.push_back(b);
     return int(scene_.bsdfs.size()) - 1;
   }
@@ -1134,19 +884,19 @@ class PbrtLoader {
 
   // ---- Lights ----
 
-  void parseAreaLight(Directive& d) {
+  void parseAreaLight(PbrtDirective& d) {
     if (d.strings[0] != "diffuse")
-      fail(d, "area light '" + d.strings[0] + "' is not supported (diffuse)");
+      d.fail("area light '" + d.strings[0] + "' is not supported (diffuse)");
     Spectrum L(1.0f);
     getSpectrum(d, "L", &L);
-    double scale = getFloat(d, "scale", 1);
-    if (!(scale >= 0)) fail(d, "area light scale must be >= 0");
-    attrs_.areaLight.twoSided = getBool(d, "twosided", false);
-    if (d.params.has("power")) fail(d, "area light 'power' is not supported: give L");
-    if (d.params.has("filename")) fail(d, "image area lights are not supported");
-    getInt(d, "nsamples", 1);  // v3's sample count: the farm samples its own way
-    getInt(d, "samples", 1);
-    rejectUnused(d, "area light");
+    double scale = d.getFloat("scale", 1);
+    if (!(scale >= 0)) d.fail("area light scale must be >= 0");
+    attrs_.areaLight.twoSided = d.getBool("twosided", false);
+    if (d.has("power")) d.fail("area light 'power' is not supported: give L");
+    if (d.has("filename")) d.fail("image area lights are not supported");
+    d.getInt("nsamples", 1);  // v3's sample count: the farm samples its own way
+    d.getInt("samples", 1);
+    d.rejectUnused("area light");
     attrs_.areaLight.radiance = L * float(scale);
     attrs_.areaLight.active = true;
   }
@@ -1154,70 +904,70 @@ class PbrtLoader {
   // LightSource "infinite": the environment, constant or a lat-long image (v3's "mapname",
   // v4's "filename"), in the light's coordinate system (z up).
   // A "point3" parameter (v3 also writes "point"), in the light's coordinate system.
-  Vec3f getPoint(Directive& d, const std::string& name, const Vec3f& def) {
-    Param* p = typed(d, name, {"point3", "point"});
+  Vec3f getPoint(PbrtDirective& d, const std::string& name, const Vec3f& def) {
+    PbrtParam* p = d.typed(name, {"point3", "point"});
     if (!p) return def;
-    if (p->numbers.size() != 3) failParam(d, *p, "parameter '" + name + "' takes 3 numbers");
+    if (p->numbers.size() != 3) d.failParam(*p, "parameter '" + name + "' takes 3 numbers");
     return Vec3f(float(p->numbers[0]), float(p->numbers[1]), float(p->numbers[2]));
   }
 
   // LightSource "point" and "spot": intensity I (times scale) from "from", a spot aimed at "to"
   // with a cone of "coneangle" degrees whose last "conedeltaangle" (v4: "conedelta") fall off.
-  void parsePointLight(Directive& d) {
+  void parsePointLight(PbrtDirective& d) {
     const std::string& type = d.strings[0];
-    if (inObject_) fail(d, "a light source inside an object definition");
+    if (inObject_) d.fail("a light source inside an object definition");
     PointLightDescription light;
     Spectrum I(1.0f), scale(1.0f);
     getSpectrum(d, "I", &I);
     getSpectrum(d, "scale", &scale);
-    if (d.params.has("power")) fail(d, type + " light 'power' is not supported: give I");
+    if (d.has("power")) d.fail(type + " light 'power' is not supported: give I");
     const Vec3f from = getPoint(d, "from", Vec3f(0.0f));
     light.position = attrs_.ctm.applyPoint(from);
     light.intensity = I * scale;
     if (type == "spot") {
       const Vec3f to = getPoint(d, "to", Vec3f(0, 0, 1));
-      const double cone = getFloat(d, "coneangle", 30);
-      double delta = getFloat(d, "conedeltaangle", 5);
-      if (d.params.has("conedelta")) delta = getFloat(d, "conedelta", 5);
-      if (!(cone > 0 && cone <= 180)) fail(d, "spot coneangle must be in (0, 180] degrees");
-      if (!(delta >= 0 && delta <= cone)) fail(d, "spot cone delta must be in [0, coneangle]");
+      const double cone = d.getFloat("coneangle", 30);
+      double delta = d.getFloat("conedeltaangle", 5);
+      if (d.has("conedelta")) delta = d.getFloat("conedelta", 5);
+      if (!(cone > 0 && cone <= 180)) d.fail("spot coneangle must be in (0, 180] degrees");
+      if (!(delta >= 0 && delta <= cone)) d.fail("spot cone delta must be in [0, coneangle]");
       const Vec3f axis = attrs_.ctm.applyVector(to - from);
-      if (!(length(axis) > 0) || !isFinite(axis)) fail(d, "spot: \"from\" and \"to\" coincide");
+      if (!(length(axis) > 0) || !isFinite(axis)) d.fail("spot: \"from\" and \"to\" coincide");
       light.spot = true;
       light.direction = normalize(axis);
       light.cosTotalWidth = float(std::cos(cone * M_PI / 180));
       light.cosFalloffStart = float(std::cos((cone - delta) * M_PI / 180));
       light.falloff = PointLightDescription::Falloff::PbrtV3Quartic;  // v4's: at the end
     }
-    rejectUnused(d, type + " light");
-    if (!isFinite(light.position)) fail(d, type + " light: its position is not finite");
+    d.rejectUnused(type + " light");
+    if (!isFinite(light.position)) d.fail(type + " light: its position is not finite");
     light.origin =
         fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type + ")";
     scene_.pointLights.push_back(light);
   }
 
-  void parseLightSource(Directive& d) {
+  void parseLightSource(PbrtDirective& d) {
     if (d.strings[0] == "point" || d.strings[0] == "spot") return parsePointLight(d);
     if (d.strings[0] != "infinite")
-      fail(d, "light source '" + d.strings[0] +
-                  "' is not supported yet (AreaLightSource \"diffuse\"; LightSource "
-                  "\"infinite\", \"point\" and \"spot\")");
-    if (scene_.environment.present) fail(d, "more than one infinite light");
-    if (inObject_) fail(d, "a light source inside an object definition");
+      d.fail("light source '" + d.strings[0] +
+             "' is not supported yet (AreaLightSource \"diffuse\"; LightSource "
+             "\"infinite\", \"point\" and \"spot\")");
+    if (scene_.environment.present) d.fail("more than one infinite light");
+    if (inObject_) d.fail("a light source inside an object definition");
     Spectrum L(1.0f), scale(1.0f);
     getSpectrum(d, "L", &L);
     getSpectrum(d, "scale", &scale);
-    std::string filename = getString(d, "filename", "");
-    const std::string mapname = getString(d, "mapname", "");
-    if (!filename.empty() && !mapname.empty()) fail(d, "both \"filename\" and \"mapname\" given");
+    std::string filename = d.getString("filename", "");
+    const std::string mapname = d.getString("mapname", "");
+    if (!filename.empty() && !mapname.empty()) d.fail("both \"filename\" and \"mapname\" given");
     // v4's "filename" names a square equal-area map; a lat-long one (v3's "mapname") is taken too.
     const bool equalAreaAllowed = !filename.empty();
     if (filename.empty()) filename = mapname;
-    if (d.params.has("illuminance")) fail(d, "infinite light 'illuminance' is not supported");
-    if (d.params.has("portal")) fail(d, "infinite light portals are not supported");
-    getInt(d, "nsamples", 1);  // v3's sample count: the farm samples its own way
-    getInt(d, "samples", 1);
-    rejectUnused(d, "infinite light");
+    if (d.has("illuminance")) d.fail("infinite light 'illuminance' is not supported");
+    if (d.has("portal")) d.fail("infinite light portals are not supported");
+    d.getInt("nsamples", 1);  // v3's sample count: the farm samples its own way
+    d.getInt("samples", 1);
+    d.rejectUnused("infinite light");
     scene_.environment =
         makeEnvironment(dir_, d.file, d.line, L * scale, attrs_.ctm, filename, equalAreaAllowed);
   }
@@ -1226,10 +976,10 @@ class PbrtLoader {
 
   // ---- Media ----
 
-  int mediumNamed(const Directive& d, const std::string& name) {
+  int mediumNamed(const PbrtDirective& d, const std::string& name) {
     if (name.empty()) return -1;
     auto it = namedMedia_.find(name);
-    if (it == namedMedia_.end()) fail(d, "medium '" + name + "' is not defined");
+    if (it == namedMedia_.end()) d.fail("medium '" + name + "' is not defined");
     return it->second;
   }
 
@@ -1238,81 +988,81 @@ class PbrtLoader {
   // p0 to p1 in the space of the current transformation; pbrt-v4's "nanovdb" with the grid
   // "density" of an OpenVDB file, a .vdb: NanoVDB's own files are not read). sigma_a and
   // sigma_s are required: pbrt-v3 and v4 default them differently.
-  int makeMedium(Directive& d) {
-    const std::string type = getString(d, "type", "");
+  int makeMedium(PbrtDirective& d) {
+    const std::string type = d.getString("type", "");
     const std::string what = "medium '" + d.strings[0] + "' of type '" + type + "'";
     if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid" &&
         type != "nanovdb")
-      fail(d, type.empty() ? "MakeNamedMedium '" + d.strings[0] + "' has no \"string type\""
-                           : what +
-                                 " is not supported (homogeneous, heterogeneous, uniformgrid, "
-                                 "nanovdb with an OpenVDB file)");
+      d.fail(type.empty() ? "MakeNamedMedium '" + d.strings[0] + "' has no \"string type\""
+                          : what +
+                                " is not supported (homogeneous, heterogeneous, uniformgrid, "
+                                "nanovdb with an OpenVDB file)");
     if (type == "uniformgrid" || type == "nanovdb") sawV4_ = true;
-    if (d.params.has("preset"))
-      failParam(d, *d.params.find("preset"),
-                what +
-                    ": named presets (measured coefficients) are not supported: give "
-                    "sigma_a and sigma_s");
+    if (d.has("preset"))
+      d.failParam(*d.find("preset"),
+                  what +
+                      ": named presets (measured coefficients) are not supported: give "
+                      "sigma_a and sigma_s");
     for (const char* emission : {"Le", "Lescale", "temperature", "temperaturescale"})
-      if (d.params.has(emission))
-        failParam(d, *d.params.find(emission), what + ": emitting media are not supported");
+      if (d.has(emission))
+        d.failParam(*d.find(emission), what + ": emitting media are not supported");
     MediumDescription m;
     m.id = d.strings[0];
     m.origin = fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type +
                " '" + d.strings[0] + "')";
     if (!getSpectrum(d, "sigma_a", &m.sigmaA) || !getSpectrum(d, "sigma_s", &m.sigmaS))
-      fail(d, what +
-                  " needs \"rgb sigma_a\" and \"rgb sigma_s\" (pbrt-v3 and v4 default "
-                  "them differently)");
-    const double scale = getFloat(d, "scale", 1);
-    if (!(scale >= 0) || !std::isfinite(scale)) fail(d, what + ": scale must be >= 0");
+      d.fail(what +
+             " needs \"rgb sigma_a\" and \"rgb sigma_s\" (pbrt-v3 and v4 default "
+             "them differently)");
+    const double scale = d.getFloat("scale", 1);
+    if (!(scale >= 0) || !std::isfinite(scale)) d.fail(what + ": scale must be >= 0");
     m.sigmaA *= float(scale);
     m.sigmaS *= float(scale);
-    m.g = float(getFloat(d, "g", 0));
+    m.g = float(d.getFloat("g", 0));
     if (type == "nanovdb") {
-      const std::string filename = getString(d, "filename", "");
-      if (filename.empty()) fail(d, what + " needs a \"string filename\"");
+      const std::string filename = d.getString("filename", "");
+      if (filename.empty()) d.fail(what + " needs a \"string filename\"");
       if (filename.size() < 5 || filename.substr(filename.size() - 4) != ".vdb")
-        fail(d, what + ": '" + filename +
-                    "' is not an OpenVDB file (.vdb); NanoVDB files are not read: convert it "
-                    "with nanovdb_convert");
+        d.fail(what + ": '" + filename +
+               "' is not an OpenVDB file (.vdb); NanoVDB files are not read: convert it "
+               "with nanovdb_convert");
       const fs::path file = sceneFilePath(dir_, filename, "volume file", d.file, d.line);
       std::string problem;
-      if (!readVdbDensity(file, "density", &m, &problem)) fail(d, filename + ": " + problem);
+      if (!readVdbDensity(file, "density", &m, &problem)) d.fail(filename + ": " + problem);
       const Matrix4 worldToMedium = attrs_.ctm.inverse();
-      if (!worldToMedium.isFinite()) fail(d, what + ": the transformation is singular");
+      if (!worldToMedium.isFinite()) d.fail(what + ": the transformation is singular");
       m.worldToGrid = m.worldToGrid * worldToMedium;
     } else if (type != "homogeneous") {
       m.type = MediumDescription::Type::Grid;
-      const long long nx = getInt(d, "nx", 1), ny = getInt(d, "ny", 1), nz = getInt(d, "nz", 1);
+      const long long nx = d.getInt("nx", 1), ny = d.getInt("ny", 1), nz = d.getInt("nz", 1);
       if (nx < 1 || ny < 1 || nz < 1 || nx * ny > (1ll << 28) / nz)
-        fail(d, what + ": nx, ny and nz must be >= 1 and their product at most 2^28");
+        d.fail(what + ": nx, ny and nz must be >= 1 and their product at most 2^28");
       m.nx = int(nx), m.ny = int(ny), m.nz = int(nz);
-      const std::vector<double> density = getNumbers(d, "density", {"float"}, 1);
+      const std::vector<double> density = d.getNumbers("density", {"float"}, 1);
       if (density.size() != size_t(nx * ny * nz))
-        fail(d, what + ": \"float density\" has " + std::to_string(density.size()) +
-                    " values for nx * ny * nz = " + std::to_string(nx * ny * nz));
+        d.fail(what + ": \"float density\" has " + std::to_string(density.size()) +
+               " values for nx * ny * nz = " + std::to_string(nx * ny * nz));
       m.density.assign(density.begin(), density.end());
       const Vec3f p0 = getPoint(d, "p0", Vec3f(0.0f)), p1 = getPoint(d, "p1", Vec3f(1.0f));
       const Matrix4 gridToWorld = attrs_.ctm * Matrix4::translate(p0) * Matrix4::scale(p1 - p0);
       m.worldToGrid = gridToWorld.inverse();
-      if (!m.worldToGrid.isFinite()) fail(d, what + ": the box from p0 to p1 is empty");
+      if (!m.worldToGrid.isFinite()) d.fail(what + ": the box from p0 to p1 is empty");
       m.cellCentred = true;
     }
-    rejectUnused(d, what);
+    d.rejectUnused(what);
     const std::string problem = mediumProblem(m);
-    if (!problem.empty()) fail(d, what + ": " + problem);
+    if (!problem.empty()) d.fail(what + ": " + problem);
     scene_.media.push_back(std::move(m));
     return int(scene_.media.size()) - 1;
   }
 
-  void parseShape(Directive& d) {
+  void parseShape(PbrtDirective& d) {
     const std::string& type = d.strings[0];
     const std::string what = "shape '" + type + "'";
     for (const char* alpha : {"alpha", "shadowalpha"}) {
-      Param* p = d.params.find(alpha);
+      PbrtParam* p = d.find(alpha);
       if (p && (p->type == "texture" || p->numbers.size() != 1 || p->numbers[0] != 1))
-        failParam(d, *p, what + ": alpha cut-outs are not supported");
+        d.failParam(*p, what + ": alpha cut-outs are not supported");
     }
     ShapeDescription shape;
     shape.bsdf = currentMaterial();
@@ -1322,7 +1072,7 @@ class PbrtLoader {
       shape.emitsBothSides = attrs_.areaLight.twoSided;
     }
     if (shape.bsdf == kInterfaceMaterial) {
-      if (shape.isEmitter) fail(d, what + ": an area light on an interface material");
+      if (shape.isEmitter) d.fail(what + ": an area light on an interface material");
       shape.nullBoundary = true;
       shape.bsdf = -1;
     }
@@ -1345,28 +1095,28 @@ class PbrtLoader {
 
     if (type == "trianglemesh" || type == "bilinearmesh") {
       const bool bilinear = type == "bilinearmesh";
-      std::vector<double> P = getNumbers(d, "P", {"point3"}, 3);
-      if (P.empty()) fail(d, what + " has no \"point3 P\"");
+      std::vector<double> P = d.getNumbers("P", {"point3"}, 3);
+      if (P.empty()) d.fail(what + " has no \"point3 P\"");
       const size_t nv = P.size() / 3;
-      std::vector<double> idx = getNumbers(d, "indices", {"integer"}, bilinear ? 4 : 3);
+      std::vector<double> idx = d.getNumbers("indices", {"integer"}, bilinear ? 4 : 3);
       if (idx.empty()) {
-        if (nv != (bilinear ? 4u : 3u)) fail(d, what + " has no \"integer indices\"");
+        if (nv != (bilinear ? 4u : 3u)) d.fail(what + " has no \"integer indices\"");
         for (size_t k = 0; k < nv; ++k) idx.push_back(double(k));
       }
-      std::vector<double> N = getNumbers(d, "N", {"normal3"}, 3);
-      Param* uvParam = d.params.find("uv");
-      if (!uvParam) uvParam = d.params.find("st");
+      std::vector<double> N = d.getNumbers("N", {"normal3"}, 3);
+      PbrtParam* uvParam = d.find("uv");
+      if (!uvParam) uvParam = d.find("st");
       std::vector<double> uv;
       if (uvParam) {
         if ((uvParam->type != "float" && uvParam->type != "point2") ||
             uvParam->numbers.size() != 2 * nv)
-          failParam(d, *uvParam, what + ": uv needs two numbers per vertex");
+          d.failParam(*uvParam, what + ": uv needs two numbers per vertex");
         uv = uvParam->numbers;
       }
-      getNumbers(d, "S", {"vector3"}, 3);  // tangents: no anisotropic BSDF reads them
-      getNumbers(d, "faceIndices", {"integer"}, 1);
-      rejectUnused(d, what);
-      if (!N.empty() && N.size() != P.size()) fail(d, what + ": N needs one normal per vertex");
+      d.getNumbers("S", {"vector3"}, 3);  // tangents: no anisotropic BSDF reads them
+      d.getNumbers("faceIndices", {"integer"}, 1);
+      d.rejectUnused(what);
+      if (!N.empty() && N.size() != P.size()) d.fail(what + ": N needs one normal per vertex");
       std::vector<Vec3f> positions(nv), normals;
       std::vector<Vec2f> uvs;
       for (size_t k = 0; k < nv; ++k) positions[k] = vec(P, 3 * k);
@@ -1380,8 +1130,8 @@ class PbrtLoader {
       }
       for (double v : idx)
         if (v < 0 || v >= double(nv) || v != std::floor(v))
-          fail(d, what + ": index " + formatNumber(v) + " is not one of the " + std::to_string(nv) +
-                      " vertices");
+          d.fail(what + ": index " + formatNumber(v) + " is not one of the " + std::to_string(nv) +
+                 " vertices");
       if (bilinear) {
         // Patches p00 p10 p01 p11; a planar one is exactly two triangles.
         for (size_t q = 0; q < idx.size(); q += 4) {
@@ -1390,7 +1140,7 @@ class PbrtLoader {
           Vec3f n = cross(p10 - p00, p01 - p00);
           float scale = std::max({length(p10 - p00), length(p01 - p00), length(p11 - p00)});
           if (std::fabs(dot(normalize(n), p11 - p00)) > 1e-5f * scale)
-            fail(d, what + ": a non-planar bilinear patch is not supported");
+            d.fail(what + ": a non-planar bilinear patch is not supported");
           uint32_t a = uint32_t(idx[q]), b = uint32_t(idx[q + 1]), c = uint32_t(idx[q + 2]),
                    e = uint32_t(idx[q + 3]);
           for (uint32_t v : {a, b, e, a, e, c}) shape.indices.push_back(v);
@@ -1399,7 +1149,7 @@ class PbrtLoader {
           // pbrt's default patch parameterization: (0,0) (1,0) (0,1) (1,1) per patch corner;
           // only well defined when patches do not share vertices, so only for textures that
           // need it.
-          if (textured) fail(d, what + ": a textured bilinear patch needs uv");
+          if (textured) d.fail(what + ": a textured bilinear patch needs uv");
         }
       } else {
         for (double v : idx) shape.indices.push_back(uint32_t(v));
@@ -1407,7 +1157,7 @@ class PbrtLoader {
       if (textured && uvs.empty()) {
         // pbrt's default triangle uvs are (0,0) (1,0) (1,1) per triangle: meshes sharing
         // vertices cannot carry them, and a texture read at one point would be a constant.
-        fail(d, what + " has a textured material but no uv");
+        d.fail(what + " has a textured material but no uv");
       }
       const bool hasNormals = !normals.empty();
       if (hasNormals && flipWithoutNormals) warnOrientation(d);
@@ -1416,11 +1166,11 @@ class PbrtLoader {
                  std::move(uvs), &shape, &scene_.warnings);
       shape.origin += ")";
     } else if (type == "plymesh") {
-      std::string filename = getString(d, "filename", "");
-      if (filename.empty()) fail(d, what + " has no filename");
-      if (d.params.has("displacement")) fail(d, what + ": displacement is not supported");
-      getFloat(d, "edgelength", 1);
-      rejectUnused(d, what);
+      std::string filename = d.getString("filename", "");
+      if (filename.empty()) d.fail(what + " has no filename");
+      if (d.has("displacement")) d.fail(what + ": displacement is not supported");
+      d.getFloat("edgelength", 1);
+      d.rejectUnused(what);
       const fs::path path = sceneFilePath(dir_, filename, "mesh file", d.file, d.line);
       PlyMesh mesh;
       auto cached = plyCache_.find(path.lexically_normal().string());
@@ -1431,12 +1181,12 @@ class PbrtLoader {
         try {
           mesh = parsePly(bytes);
         } catch (const std::exception& e) {
-          fail(d, "cannot read PLY '" + filename + "': " + e.what());
+          d.fail("cannot read PLY '" + filename + "': " + e.what());
         }
         plyCache_[path.lexically_normal().string()] = mesh;
       }
       if (textured && mesh.uvs.empty())
-        fail(d, what + " '" + filename + "' has a textured material but no texture coordinates");
+        d.fail(what + " '" + filename + "' has a textured material but no texture coordinates");
       shape.indices = std::move(mesh.indices);
       const bool hasNormals = !mesh.normals.empty();
       if (hasNormals && flipWithoutNormals) warnOrientation(d);
@@ -1445,27 +1195,27 @@ class PbrtLoader {
                  std::move(mesh.normals), std::move(mesh.uvs), &shape, &scene_.warnings);
       shape.origin += " " + filename + ")";
     } else if (type == "sphere") {
-      double r = getFloat(d, "radius", 1);
-      if (!(r > 0)) fail(d, "sphere radius must be > 0");
-      double zmin = getFloat(d, "zmin", -r), zmax = getFloat(d, "zmax", r);
-      double phimax = getFloat(d, "phimax", 360);
-      if (zmin > -r || zmax < r || phimax < 360) fail(d, "partial spheres are not supported");
-      rejectUnused(d, what);
-      if (textured) fail(d, "textured spheres are not supported");
+      double r = d.getFloat("radius", 1);
+      if (!(r > 0)) d.fail("sphere radius must be > 0");
+      double zmin = d.getFloat("zmin", -r), zmax = d.getFloat("zmax", r);
+      double phimax = d.getFloat("phimax", 360);
+      if (zmin > -r || zmax < r || phimax < 360) d.fail("partial spheres are not supported");
+      d.rejectUnused(what);
+      if (textured) d.fail("textured spheres are not supported");
       double s = similarityScale(d, toWorld);
       shape.type = ShapeDescription::Type::Sphere;
       shape.center = toWorld.applyPoint(Vec3f(0.0f));
       shape.radius = float(r * s);
       shape.flipNormals = flipWithoutNormals;
       if (!(shape.radius > 0) || !std::isfinite(shape.radius) || !isFinite(shape.center))
-        fail(d, "sphere has a degenerate world-space radius or center");
+        d.fail("sphere has a degenerate world-space radius or center");
       shape.origin += ")";
     } else if (type == "disk") {
-      double h = getFloat(d, "height", 0), r = getFloat(d, "radius", 1);
-      double inner = getFloat(d, "innerradius", 0), phimax = getFloat(d, "phimax", 360);
-      if (!(r > 0)) fail(d, "disk radius must be > 0");
-      if (inner != 0 || phimax < 360) fail(d, "partial disks (annuli, sectors) are not supported");
-      rejectUnused(d, what);
+      double h = d.getFloat("height", 0), r = d.getFloat("radius", 1);
+      double inner = d.getFloat("innerradius", 0), phimax = d.getFloat("phimax", 360);
+      if (!(r > 0)) d.fail("disk radius must be > 0");
+      if (inner != 0 || phimax < 360) d.fail("partial disks (annuli, sectors) are not supported");
+      d.rejectUnused(what);
       // A fan of kDiskSegments triangles, normal +z, pbrt's uv: u = phi / 2 pi, v = 1 - r / R.
       std::vector<Vec3f> positions;
       std::vector<Vec2f> uvs;
@@ -1486,17 +1236,17 @@ class PbrtLoader {
                   " triangles (area 6e-6 short of the disk's)");
       shape.origin += ")";
     } else {
-      fail(d, what + " is not supported (trianglemesh, plymesh, sphere, disk, bilinearmesh)");
+      d.fail(what + " is not supported (trianglemesh, plymesh, sphere, disk, bilinearmesh)");
     }
     // A scene-wide budget: a small file can name a large PLY many times, or many disks.
     geometryElements_ += shape.positions.size() + shape.indices.size();
     if (geometryElements_ > kMaxGeometryElements)
-      fail(d, "the scene's meshes exceed " + std::to_string(kMaxGeometryElements) +
-                  " vertices and triangle corners in all");
+      d.fail("the scene's meshes exceed " + std::to_string(kMaxGeometryElements) +
+             " vertices and triangle corners in all");
     if (inObject_) {
       // Instanced shapes take no area light (pbrt refuses them too: one light per instance
       // would need the instance's transform in its sampling).
-      if (shape.isEmitter) fail(d, "an area light inside an object definition is not supported");
+      if (shape.isEmitter) d.fail("an area light inside an object definition is not supported");
       objects_[objectName_].push_back(std::move(shape));
       return;
     }
@@ -1505,13 +1255,13 @@ class PbrtLoader {
 
   // ObjectInstance: the object's shapes (in the space their definition's transformation made)
   // copied through the current transformation, as pbrt's instance-to-world applies it to them.
-  void instantiate(Directive& d) {
-    if (inObject_) fail(d, "ObjectInstance inside the definition of object '" + objectName_ + "'");
+  void instantiate(PbrtDirective& d) {
+    if (inObject_) d.fail("ObjectInstance inside the definition of object '" + objectName_ + "'");
     auto it = objects_.find(d.strings[0]);
-    if (it == objects_.end()) fail(d, "object '" + d.strings[0] + "' is not defined");
+    if (it == objects_.end()) d.fail("object '" + d.strings[0] + "' is not defined");
     const Matrix4& m = attrs_.ctm;
     if (std::fabs(determinant3(m)) < 1e-30 || !m.inverse().isFinite())
-      fail(d, "the instance's transformation is singular");
+      d.fail("the instance's transformation is singular");
     const Matrix4 normalMatrix = m.inverse().transpose();
     const bool mirrors = determinant3(m) < 0;
     for (const ShapeDescription& original : it->second) {
@@ -1527,39 +1277,39 @@ class PbrtLoader {
         for (Vec3f& p : shape.positions) p = m.applyPoint(p);
         for (Vec3f& n : shape.normals) {
           n = normalize(normalMatrix.applyVector(n));
-          if (!isFinite(n)) fail(d, "the instance's transformation makes a normal non-finite");
+          if (!isFinite(n)) d.fail("the instance's transformation makes a normal non-finite");
         }
         // Without normals the winding tells the outside: a mirror would turn it round.
         if (mirrors)
           for (size_t t = 0; t < shape.indices.size(); t += 3)
             std::swap(shape.indices[t + 1], shape.indices[t + 2]);
         for (const Vec3f& p : shape.positions)
-          if (!isFinite(p)) fail(d, "the instance's transformation makes a position non-finite");
+          if (!isFinite(p)) d.fail("the instance's transformation makes a position non-finite");
       }
       geometryElements_ += shape.positions.size() + shape.indices.size();
       if (geometryElements_ > kMaxGeometryElements)
-        fail(d, "the scene's meshes exceed " + std::to_string(kMaxGeometryElements) +
-                    " vertices and triangle corners in all");
+        d.fail("the scene's meshes exceed " + std::to_string(kMaxGeometryElements) +
+               " vertices and triangle corners in all");
       scene_.shapes.push_back(std::move(shape));
     }
   }
 
   // pbrt-v3 turns a mesh with normals round under ReverseOrientation (or a mirror), v4 does not:
   // the farm follows v4 (the normals decide) and says so, as it decides where a light shines.
-  void warnOrientation(const Directive& d) {
+  void warnOrientation(const PbrtDirective& d) {
     warn(d,
          "mesh with normals under ReverseOrientation or a mirroring transform: oriented by its "
          "normals, as pbrt-v4 does (pbrt-v3 would turn it round)");
   }
 
   // The uniform scale of a rotation-scale-translation matrix: spheres stay analytic.
-  double similarityScale(const Directive& d, const Matrix4& t) const {
+  double similarityScale(const PbrtDirective& d, const Matrix4& t) const {
     double s;
     switch (similarityOf(t, &s)) {
       case Similarity::NonUniformScale:
-        fail(d, "a sphere under a non-uniform scale (an ellipsoid) is not supported");
+        d.fail("a sphere under a non-uniform scale (an ellipsoid) is not supported");
       case Similarity::Shear:
-        fail(d, "a sphere under a shear is not supported");
+        d.fail("a sphere under a shear is not supported");
       case Similarity::Uniform:
         break;
     }
@@ -1586,8 +1336,6 @@ class PbrtLoader {
   TextureImageCache images_;
   std::vector<int> textureDepth_;  // per texture: 1 + its deepest child's
   size_t geometryElements_ = 0;
-  int includedFiles_ = 0;
-  std::vector<std::string> includeStack_;
   bool sawFilter_ = false, sawV4_ = false;
   std::map<std::string, PlyMesh> plyCache_;
   int defaultMaterial_ = -1;
