@@ -195,6 +195,19 @@ TEST(EmbeddedRender, ReportShowsTheBootstrapsSizeAndZsShareOfTheError) {
   EXPECT_NE(finalReport(withSome, "cornell-box", reference).find("gave up on 3 connection(s)"),
             std::string::npos);
   EXPECT_EQ(progressJson(withSome)["abandoned_connections"].get<int64_t>(), 3);
+  // Where Z's standard error is above 1%, the report says what a bootstrap that brings it to
+  // 0.5% would take: (2%/0.5%)^2 = 16 times the candidates and their time.
+  EXPECT_LT(zRel, 0.01);
+  EXPECT_EQ(report.find("--bootstrap-candidates"), std::string::npos) << report;
+  JobProgress uncertain = p;
+  uncertain.normalizationStdError = 0.02 * p.normalization;
+  uncertain.bootstrapCandidates = 70000;
+  uncertain.bootstrapSeconds = 3;
+  const std::string hint = finalReport(uncertain, "cornell-box", reference);
+  EXPECT_NE(hint.find("uncertain by Z's 2%: --bootstrap-candidates 1120000 would bring that to "
+                      "about 0.5%, at about 48 s of bootstrap"),
+            std::string::npos)
+      << hint;
 }
 
 // --flush-every sets the work between a chain's flushes; the image does not depend on it.

@@ -1,5 +1,6 @@
 #include "cli/render_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,11 @@ std::string format(const char* fmt, double value) {
   std::snprintf(buffer, sizeof(buffer), fmt, value);
   return buffer;
 }
+
+// Z's relative standard error above which the report suggests a larger bootstrap, and the error
+// it suggests one for.
+constexpr double kZErrorToMention = 0.01;
+constexpr double kZErrorAim = 0.005;
 
 double relativeZError(const JobProgress& p) {
   return p.normalization > 0 ? p.normalizationStdError / p.normalization : 0.0;
@@ -202,6 +208,20 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
       out << "  manifold next-event estimation gave up on " << p.abandonedConnections
           << " connection(s) among the candidates (paths found in fewer than one in 10^4 "
              "trials, left out of Z)\n";
+    // Z sets the whole image's brightness, so its error is what one render's channel means are
+    // off by, however long the chains run (mlt's index-4 water at 60 s: Z 1.4-1.7% off, the
+    // means 2.2-2.5% in two of three seeds; docs/specular.md). Above 1%, say what halving it
+    // and more would cost: the error falls as the square root of the candidates.
+    if (zError > kZErrorToMention && p.bootstrapCandidates > 0) {
+      const double factor = std::pow(zError / kZErrorAim, 2);
+      const int64_t wanted =
+          std::min<int64_t>(int64_t(std::ceil(factor * double(p.bootstrapCandidates))), 1 << 26);
+      const double ratio = double(wanted) / double(p.bootstrapCandidates);
+      out << "  the image's brightness is uncertain by Z's " << format("%.3g", 100 * zError)
+          << "%: --bootstrap-candidates " << wanted << " would bring that to about "
+          << format("%.2g", 100 * zError / std::sqrt(ratio)) << "%, at about "
+          << format("%.0f", p.bootstrapSeconds * ratio) << " s of bootstrap\n";
+    }
   }
   out << "  " << workUnit(s) << ": " << p.workDone << " ("
       << format("%.2f", pixels > 0 ? p.workDone / pixels : 0) << " per pixel), "
