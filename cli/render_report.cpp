@@ -214,8 +214,8 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
     // and more would cost: the error falls as the square root of the candidates.
     if (zError > kZErrorToMention && p.bootstrapCandidates > 0) {
       const double factor = std::pow(zError / kZErrorAim, 2);
-      const int64_t wanted =
-          std::min<int64_t>(int64_t(std::ceil(factor * double(p.bootstrapCandidates))), 1 << 26);
+      const int64_t wanted = std::min(int64_t(std::ceil(factor * double(p.bootstrapCandidates))),
+                                      kMaxBootstrapSamples);
       const double ratio = double(wanted) / double(p.bootstrapCandidates);
       out << "  the image's brightness is uncertain by Z's " << format("%.3g", 100 * zError)
           << "%: --bootstrap-candidates " << wanted << " would bring that to about "

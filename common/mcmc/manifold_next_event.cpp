@@ -69,7 +69,7 @@ bool ManifoldNextEvent::covers(const Path& x) const {
   // chain of several vertices (its solutions' basins small, near a caustic), and a curved
   // mirror's reflections of the light, whose value 1 / |det| grows without bound at the folds of
   // the caustic it throws (the water's reflections on the walls at index 4 were two thirds of Z's
-  // variance, against a sixth of Z; docs/specular.md). A refraction into water or glass bends
+  // variance, for 39% of Z; docs/specular.md). A refraction into water or glass bends
   // light towards the normal and spreads what a light sends through it evenly (the floor under
   // the water, lit through its surface), where this estimator's next event beats BDPT's light
   // subpaths.

@@ -45,9 +45,8 @@ std::string RenderSettings::validate() const {
         << timeBudgetSeconds;
   } else if (maxDepth < -1 || maxDepth > 4096) {
     err << "--max-depth must be -1 (unbounded), 0 (the scene's) or 1..4096, not " << maxDepth;
-  } else if (bootstrapSamples < 0 || bootstrapSamples > (int64_t(1) << 26)) {
-    // Eight bytes a candidate, all held at once: 2^26 is 512 MiB.
-    err << "--bootstrap-candidates must be in 0.." << (int64_t(1) << 26) << ", not "
+  } else if (bootstrapSamples < 0 || bootstrapSamples > kMaxBootstrapSamples) {
+    err << "--bootstrap-candidates must be in 0.." << kMaxBootstrapSamples << ", not "
         << bootstrapSamples;
   } else if (numChains < 0 || numChains > 1 << 20) {
     err << "number of chains must be in 0.." << (1 << 20) << ", not " << numChains;

@@ -14,6 +14,10 @@ enum class ShadingNormals { Scene, Strict, Lax };
 const char* shadingNormalsName(ShadingNormals s);  // "scene", "strict", "lax"
 bool parseShadingNormals(const std::string& name, ShadingNormals* out);
 
+// The most bootstrap candidates a job may ask for: eight bytes a candidate, all held at once,
+// 2^26 is 512 MiB.
+constexpr int64_t kMaxBootstrapSamples = int64_t(1) << 26;
+
 struct RenderSettings {
   Algorithm algorithm = Algorithm::PSSMLT;
   // --algorithm auto: the coordinator picks the algorithm by the scene's plan (its first
