@@ -81,20 +81,33 @@ bool ManifoldNextEvent::covers(const Path& x) const {
   return x.isSpecular(scene_, j + 2);
 }
 
+ManifoldNextEvent::SeedRegion ManifoldNextEvent::seedRegion(const PathVertex& y,
+                                                            const PathVertex& z) const {
+  SeedRegion region;
+  SurfaceHit hit;
+  Ray ray = scene_.spawnRay(z.p, z.n, y.p - z.p);
+  ray.tMax = length(y.p - ray.o);
+  ++context_.rays;
+  region.crossing = scene_.intersect(ray, &hit) && scene_.bsdfOf(hit.shape).isDelta();
+  region.point = hit.p;
+  region.normal = hit.ng;
+  region.sigma = 0.1 * double(length(y.p - z.p));
+  return region;
+}
+
 bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool severalAllowed,
-                              bool crossing, const Vec3f& crossingPoint,
-                              const Vec3f& crossingNormal, double sigma, Sampler& sampler,
-                              Path* chain) const {
+                              const SeedRegion& region, Sampler& sampler, Path* chain) const {
   // The seed: a point near the crossing (a Gaussian offset in its tangent plane) or anywhere on
   // the specular surfaces; four numbers either way.
   const float choice = sampler.next(kLightStream);
   float u[3] = {sampler.next(kLightStream), sampler.next(kLightStream), sampler.next(kLightStream)};
   Vec3f seed;
-  if (crossing && choice < kLocalShare) {
-    const double radius = sigma * std::sqrt(-2 * std::log(std::max(1e-12, 1.0 - double(u[0]))));
+  if (region.crossing && choice < kLocalShare) {
+    const double radius =
+        region.sigma * std::sqrt(-2 * std::log(std::max(1e-12, 1.0 - double(u[0]))));
     const double phi = 2 * M_PI * double(u[1]);
-    const Frame frame(crossingNormal);
-    seed = crossingPoint + frame.s * float(radius * std::cos(phi)) +
+    const Frame frame(region.normal);
+    seed = region.point + frame.s * float(radius * std::cos(phi)) +
            frame.t * float(radius * std::sin(phi));
   } else {
     Vec3f n;
@@ -127,6 +140,35 @@ bool ManifoldNextEvent::solve(const PathVertex& y, const PathVertex& z, bool sev
   return manifoldWalk(context_, initial, 0, initial.length(), z, chain);
 }
 
+uint64_t ManifoldNextEvent::trialsUntilRecurs(const PathVertex& y, const PathVertex& z,
+                                              bool severalAllowed, const SeedRegion& region,
+                                              const Path& chain, Sampler& sampler) const {
+  // Trials until the same chain recurs: their count K has mean 1 / P(this chain). The same
+  // chain is found again only to the walk's precision: where z lies a millimetre from the
+  // specular vertex (the water line on a wall), a thousandth of that edge is below it, and
+  // without the walk's tolerance the chain's own recurrences were missed and K inflated
+  // (on the water caustic, 736 misses in 2^18 samples, each 0.01-5 times the walk's tolerance
+  // times the chain's derivative from the recurrence).
+  const double tolerance = manifoldWalkTolerance(scene_, z.p);
+  for (uint64_t trials = 1; trials <= kMaxTrials; ++trials) {
+    Path again;
+    if (solve(y, z, severalAllowed, region, sampler, &again) &&
+        again.vertices.size() == chain.vertices.size() &&
+        sameSpecularChain(chain, again, 0, chain.length(), tolerance))
+      return trials;
+  }
+  ++abandoned_;
+  return 0;
+}
+
+bool ManifoldNextEvent::sampleChain(const PathVertex& y, const PathVertex& z, bool severalAllowed,
+                                    Sampler& sampler, Path* chain, uint64_t* trials) const {
+  const SeedRegion region = seedRegion(y, z);
+  if (!solve(y, z, severalAllowed, region, sampler, chain)) return false;
+  *trials = trialsUntilRecurs(y, z, severalAllowed, region, *chain, sampler);
+  return *trials > 0;
+}
+
 void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, double survival,
                                 Sampler& sampler,
                                 const std::function<void(const Path&, double)>& visit) const {
@@ -136,18 +178,12 @@ void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, doubl
                       sampler.next(kLightStream)};
   PathVertex y;
   if (!sampleLightVertex(scene_, uPick, u, &y)) return;
-  // Where the segment from z to y first meets a specular surface: the local seeds' centre.
-  SurfaceHit hit;
-  Ray ray = scene_.spawnRay(z.p, z.n, y.p - z.p);
-  ray.tMax = length(y.p - ray.o);
-  ++context_.rays;
-  const bool crossing = scene_.intersect(ray, &hit) && scene_.bsdfOf(hit.shape).isDelta();
-  const double sigma = 0.1 * double(length(y.p - z.p));
+  const SeedRegion region = seedRegion(y, z);
   // Chains of several specular vertices only towards a z seen through a specular vertex.
   const bool several =
       cameraPath.size() >= 3 && scene_.bsdfOf(cameraPath[cameraPath.size() - 2].shape).isDelta();
   Path chain;
-  if (!solve(y, z, several, crossing, hit.p, hit.ng, sigma, sampler, &chain)) return;
+  if (!solve(y, z, several, region, sampler, &chain)) return;
   // y, the specular vertices, then z .. E: a path of this estimator's kind that carries light,
   // or nothing (and no trials spent on it).
   const int end = chain.length();
@@ -157,25 +193,8 @@ void ManifoldNextEvent::connect(const std::vector<PathVertex>& cameraPath, doubl
   if (!covers(x)) return;  // BDPT's (longer than allowed, or a chain it joins well)
   const PathContribution f = x.contribution(scene_, maxDepth_);
   if (!f.carriesLight()) return;
-  // Trials until the same chain recurs: their count K has mean 1 / P(this chain). The same
-  // chain is found again only to the walk's precision: where z lies a millimetre from the
-  // specular vertex (the water line on a wall), a thousandth of that edge is below it, and
-  // without the walk's tolerance the chain's own recurrences were missed and K inflated
-  // (on the water caustic, 736 misses in 2^18 samples, each 0.01-5 times the walk's tolerance
-  // times the chain's derivative from the recurrence).
-  const double tolerance = manifoldWalkTolerance(scene_, z.p);
-  uint64_t trials = 0;
-  for (;;) {
-    if (++trials > kMaxTrials) {
-      ++abandoned_;
-      return;
-    }
-    Path again;
-    if (solve(y, z, several, crossing, hit.p, hit.ng, sigma, sampler, &again) &&
-        again.vertices.size() == chain.vertices.size() &&
-        sameSpecularChain(chain, again, 0, chain.length(), tolerance))
-      break;
-  }
+  const uint64_t trials = trialsUntilRecurs(y, z, several, region, chain, sampler);
+  if (trials == 0) return;
   const int n = int(x.vertices.size());
   std::vector<double> pL(static_cast<size_t>(n)), pE(static_cast<size_t>(n));
   std::vector<char> delta(static_cast<size_t>(n));

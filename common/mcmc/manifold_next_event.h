@@ -50,16 +50,34 @@ class ManifoldNextEvent {
   // One sample; `visit` receives each path built and the luminance of its value.
   void sample(Sampler& sampler, const std::function<void(const Path&, double)>& visit) const;
 
+  // One connection of light vertex y to surface vertex z through specular vertices, as
+  // sample() makes it: a chain y S+ z drawn from a seed, and the count of further trials until
+  // the same chain recurs (mean 1 / P(chain)); false where the seed gave none or the trials ran
+  // past their cap. E[f(chain) * trials] is the sum of f over the chains the seeds reach, which
+  // is what lets the chains' own optics be checked apart from the paths around them.
+  bool sampleChain(const PathVertex& y, const PathVertex& z, bool severalAllowed, Sampler& sampler,
+                   Path* chain, uint64_t* trials) const;
+
   uint64_t rays() const { return context_.rays; }
   // Connections given up because the trials ran past their cap (10^4): each a path of
   // probability below 1e-4 of being found, left out (a bias of that order on its share).
   uint64_t abandoned() const { return abandoned_; }
 
  private:
+  // Where the seeds are drawn for joining y and z: near the first crossing of the segment from z
+  // to y with a specular surface (if any), within sigma, or anywhere on the specular surfaces.
+  struct SeedRegion {
+    bool crossing = false;
+    Vec3f point, normal;
+    double sigma = 0;
+  };
+  SeedRegion seedRegion(const PathVertex& y, const PathVertex& z) const;
   // y joined to z through specular vertices from a seed: the walked chain y S+ z, or false.
-  bool solve(const PathVertex& y, const PathVertex& z, bool severalAllowed, bool crossing,
-             const Vec3f& crossingPoint, const Vec3f& crossingNormal, double sigma,
-             Sampler& sampler, Path* chain) const;
+  bool solve(const PathVertex& y, const PathVertex& z, bool severalAllowed,
+             const SeedRegion& region, Sampler& sampler, Path* chain) const;
+  // Trials until `chain` recurs (>= 1), or 0 past their cap.
+  uint64_t trialsUntilRecurs(const PathVertex& y, const PathVertex& z, bool severalAllowed,
+                             const SeedRegion& region, const Path& chain, Sampler& sampler) const;
   void connect(const std::vector<PathVertex>& cameraPath, double survival, Sampler& sampler,
                const std::function<void(const Path&, double)>& visit) const;
 
