@@ -10,6 +10,9 @@
 // matrix, translate, scale, rotate, lookat. Anything else that would change the picture is an error
 // rather than silently ignored: a render that quietly differs from the scene is worse than one
 // that refuses to start.
+//
+// The XML, its lines, ids and values are MitsubaDocument's (mitsuba_document.h), an object's
+// named parameters MitsubaProperties' (mitsuba_properties.h); the loader says what they mean.
 #include <string>
 
 #include "common/scene/loaders/scene_files.h"
