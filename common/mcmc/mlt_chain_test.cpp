@@ -436,7 +436,7 @@ TEST(MltChain, StationaryAroundTheGlassBall) {
 // reference is a BDPT estimate (its error counted), as around the glass ball.
 TEST(MltChain, StationaryUnderAnImageSky) {
   auto scene = loadSmall(std::string(FARM_TEST_DATA_DIR) + "/sky/scene.pbrt");
-  ASSERT_TRUE(scene->environment());
+  ASSERT_TRUE(scene->lights().environment());
   const ResampledTarget target = sampleTarget(*scene, 1 << 18);
   const Shares none = ownEstimate(target);
   // (Not the caustic perturbation: its paths here start on the sky, where it does not apply.)
@@ -455,7 +455,7 @@ std::string glassBallUnderSky() {
 
 TEST(MltChain, StationaryAroundTheGlassBallUnderSkyAndLight) {
   auto scene = loadSmall(glassBallUnderSky());
-  ASSERT_TRUE(scene->environment());
+  ASSERT_TRUE(scene->lights().environment());
   expectEveryMutationStationary(*scene);
 }
 

@@ -5,7 +5,7 @@
 // its report. A part left out is gone from the code path: mlt's mutations by a zero weight, which
 // PathChain::select skips before asking whether the mutation applies; the others by the scene's
 // own data, which the code they name tests first (Camera::hasLens, Scene::bsdfAt's texture
-// index, Scene::environment, Scene::hasMedia, ManifoldNextEvent::active).
+// index, Lights::environment, Scene::hasMedia, ManifoldNextEvent::active).
 //
 // With --algorithm auto the plan also names the candidates a short pilot ranks
 // (common/render/algorithm_pilot.h). The pilot's yardstick, the reference-free error estimate,

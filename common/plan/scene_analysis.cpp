@@ -109,18 +109,20 @@ double probeLights(const Scene& scene) {
   int hits = 0, specular = 0;
   for (int k = 0; k < kProbeRays; ++k) {
     float pdf = 0;
-    const int light = scene.pickLight(rng.nextFloat(), &pdf);
-    const AreaLight& l = scene.lights()[size_t(light)];
+    const int light = scene.lights().pick(rng.nextFloat(), &pdf);
+    const Light& l = scene.lights()[size_t(light)];
     if (l.isEnvironment()) continue;
     Vec3f p, n, w;
     if (l.isPoint()) {
-      p = scene.pointLight(light).position();
-      w = scene.pointLight(light).sampleDirection(Vec2f(rng.nextFloat(), rng.nextFloat()), &pdf);
+      p = scene.lights().pointLight(light).position();
+      w = scene.lights().pointLight(light).sampleDirection(Vec2f(rng.nextFloat(), rng.nextFloat()),
+                                                           &pdf);
       n = Vec3f(0.0f);
     } else {
       const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
       scene.sampleLightPoint(light, u, &p, &n);
-      w = Frame(n).toWorld(scene.sampleEmission(light, Vec2f(rng.nextFloat(), rng.nextFloat())));
+      w = Frame(n).toWorld(
+          scene.lights().sampleEmission(light, Vec2f(rng.nextFloat(), rng.nextFloat())));
     }
     if (!(pdf > 0) && l.isPoint()) continue;
     const int s = firstHitSpecular(scene, l.isPoint() ? Ray{p, w} : scene.spawnRay(p, n, w));
@@ -144,8 +146,8 @@ double probeDirectLight(const Scene& scene) {
     SurfaceHit hit;
     if (!firstSurface(scene, ray, &hit) || scene.bsdfOf(hit.shape).isDelta()) return;
     float pdf = 0;
-    const int light = scene.pickLight(rng.nextFloat(), &pdf);
-    const AreaLight& l = scene.lights()[size_t(light)];
+    const int light = scene.lights().pick(rng.nextFloat(), &pdf);
+    const Light& l = scene.lights()[size_t(light)];
     if (l.isEnvironment()) return;
     ++seen;
     if (scene.lightOf(hit.shape) >= 0) {
@@ -154,7 +156,7 @@ double probeDirectLight(const Scene& scene) {
     }
     Vec3f p, n(0.0f);
     if (l.isPoint()) {
-      p = scene.pointLight(light).position();
+      p = scene.lights().pointLight(light).position();
     } else {
       const float u[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
       scene.sampleLightPoint(light, u, &p, &n);
@@ -241,7 +243,7 @@ SceneAnalysis analyseScene(const Scene& scene) {
   double total = 0;
   a.smallLights = true;
   for (size_t k = 0; k < scene.lights().size(); ++k) {
-    const AreaLight& l = scene.lights()[k];
+    const Light& l = scene.lights()[k];
     LightSummary s;
     s.power = double(l.power);
     total += s.power;

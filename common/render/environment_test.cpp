@@ -256,7 +256,7 @@ TEST(Environment, PathSpaceChainsTakeItWithoutMedia) {
   for (Algorithm algorithm : {Algorithm::MLT, Algorithm::ERPT}) {
     RenderSettings settings;
     settings.algorithm = algorithm;
-    EXPECT_TRUE(loadScene(path, settings)->environment()) << algorithmName(algorithm);
+    EXPECT_TRUE(loadScene(path, settings)->lights().environment()) << algorithmName(algorithm);
     SceneDescription withMedia;
     withMedia.environment.present = true;
     withMedia.media.push_back(MediumDescription());
@@ -269,7 +269,7 @@ TEST(Environment, PathSpaceChainsTakeItWithoutMedia) {
         << algorithmRefusal(withMedia, algorithm);
   }
   RenderSettings pt;
-  EXPECT_TRUE(loadScene(path, pt)->environment());
+  EXPECT_TRUE(loadScene(path, pt)->lights().environment());
   // Point lights and two-sided area lights they take.
   std::ofstream(path) << "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
                          "LightSource \"point\"\nAttributeBegin\nAreaLightSource \"diffuse\" "

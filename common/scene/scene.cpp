@@ -166,7 +166,6 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
   const int n = int(desc_.shapes.size());
   shapeBsdf_.resize(n);
   shapeLight_.assign(n, -1);
-  triangleCdf_.resize(n);
   for (int i = 0; i < n; ++i) {
     const ShapeDescription& s = desc_.shapes[i];
     if (!s.uvs.empty() && s.uvs.size() != s.positions.size())
@@ -176,6 +175,7 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
     int b = s.bsdf;
     shapeBsdf_[i] = (b >= 0 && b < int(desc_.bsdfs.size())) ? b : int(bsdfs_.size()) - 1;
     double area = 0;
+    std::vector<double> cdf;  // an emitting mesh's running triangle area
     RTCGeometry geom;
     if (s.type == ShapeDescription::Type::Sphere) {
       geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
@@ -200,7 +200,6 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
           geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
       std::copy(s.indices.begin(), s.indices.begin() + 3 * nt, idx);
       if (s.isEmitter) {
-        std::vector<double>& cdf = triangleCdf_[i];
         cdf.reserve(nt);
         for (size_t t = 0; t < nt; ++t) {
           area +=
@@ -215,16 +214,8 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
     rtcReleaseGeometry(geom);
     throwOnEmbreeError(device, "building the scene geometry");
 
-    if (s.isEmitter && area > 0 && luminance(s.radiance) > 0) {
-      AreaLight light;
-      light.shape = i;
-      light.radiance = s.radiance;
-      light.area = float(area);
-      light.twoSided = s.emitsBothSides;
-      light.power = float(double(luminance(s.radiance)) * area * kPi * (s.emitsBothSides ? 2 : 1));
-      shapeLight_[i] = int(lights_.size());
-      lights_.push_back(light);
-    }
+    if (s.isEmitter && area > 0 && luminance(s.radiance) > 0)
+      shapeLight_[i] = lights_.addShape(i, s.radiance, area, s.emitsBothSides, std::move(cdf));
   }
   // Specular surfaces by area (a sphere as one entry).
   double specularArea = 0;
@@ -257,42 +248,17 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
   if (n > 0) center_ = (lo + hi) * 0.5f;
   if (!std::isfinite(extent_) || !isFinite(center_)) extent_ = 1, center_ = Vec3f(0.0f);
 
-  if (desc_.environment.present) {
-    auto environment = std::make_unique<EnvironmentLight>(desc_.environment);
-    if (environment->luminanceIntegral() > 0) {
-      // Its flux through the disk that light subpaths leave by: the selection weight, in the
-      // units of the area lights' (radiance * area * pi).
-      AreaLight light;
-      light.shape = -1;
-      light.radiance = desc_.environment.scale;
-      light.power = float(double(kPi) * extent_ * extent_ * environment->luminanceIntegral());
-      environmentLight_ = int(lights_.size());
-      lights_.push_back(light);
-      environment_ = std::move(environment);
-    }
-  }
-
-  for (const PointLightDescription& p : desc_.pointLights) {
-    PointLight point(p);
-    if (!(point.power() > 0)) continue;  // emits nothing: sampling it would waste paths
-    AreaLight light;
-    light.point = int(pointLights_.size());
-    light.radiance = p.intensity;
-    light.power = float(point.power());
-    lights_.push_back(light);
-    pointLights_.push_back(point);
-  }
+  if (desc_.environment.present)
+    lights_.addEnvironment(std::make_unique<EnvironmentLight>(desc_.environment),
+                           desc_.environment.scale, extent_);
+  for (const PointLightDescription& p : desc_.pointLights)
+    lights_.addPoint(PointLight(p), p.intensity);
+  lights_.finish(center_, extent_);
 
   reach_ = std::max(extent_, length(camera_.position() - center_));
-  for (const PointLight& p : pointLights_)
+  for (const PointLight& p : lights_.pointLights())
     reach_ = std::max(reach_, length(p.position() - center_));
   if (!std::isfinite(reach_)) reach_ = kInfinity;
-
-  double total = 0;
-  for (const AreaLight& l : lights_) {
-    total += double(l.power);
-    lightCdf_.push_back(total);
-  }
 }
 
 Scene::~Scene() {
@@ -304,12 +270,6 @@ float Scene::offsetFor(const Vec3f& p) const {
   // Relative to the magnitude of the coordinates (float rounding of the hit point) and to the
   // scene's size, so that huge and tiny scenes behave alike.
   return 1e-5f * (maxAbsComponent(p) + extent_);
-}
-
-Vec3f Scene::environmentDiskPoint(const Vec3f& w, const Vec2f& u) const {
-  const Vec2f disk = squareToConcentricDisk(u);
-  const Frame frame(w);
-  return center_ + (w + frame.s * disk.x + frame.t * disk.y) * extent_;
 }
 
 Ray Scene::spawnRay(const Vec3f& p, const Vec3f& ng, const Vec3f& d) const {
@@ -431,14 +391,6 @@ bool Scene::sampleSpecularSurface(const float u[3], Vec3f* p, Vec3f* n) const {
   k = std::min(k, specularCdf_.size() - 1);
   const auto [shape, t] = specularPrimitives_[k];
   return pointOnPrimitive(desc_.shapes[size_t(shape)], t, {u[1], u[2]}, p, n);
-}
-
-Vec3f Scene::sampleEmission(int light, Vec2f u) const {
-  const bool back = lights_[light].twoSided && u.x >= 0.5f;
-  if (lights_[light].twoSided) u.x = std::min(back ? 2 * u.x - 1 : 2 * u.x, 0x1.fffffep-1f);
-  Vec3f local = squareToCosineHemisphere(u);
-  if (back) local.z = -local.z;
-  return local;
 }
 
 Bsdf Scene::bsdfAt(int shape, const Vec2f& uv) const {
@@ -602,53 +554,9 @@ Spectrum Scene::transmittanceToInfinity(const Vec3f& p, const Vec3f& n, const Ve
   return transmittanceAlong(p, o, w, nullptr, nullptr, medium, sampler, stream);
 }
 
-int Scene::pickLight(float u, float* pdf) const {
-  if (lights_.empty()) return -1;
-  const double total = lightCdf_.back();
-  const double target = double(u) * total;
-  int i = int(std::upper_bound(lightCdf_.begin(), lightCdf_.end(), target) - lightCdf_.begin());
-  i = std::min(i, int(lights_.size()) - 1);
-  *pdf = float(double(lights_[i].power) / total);
-  return i;
-}
-
-float Scene::lightPickPdf(int light) const {
-  if (light < 0 || lights_.empty()) return 0;
-  return float(double(lights_[light].power) / lightCdf_.back());
-}
-
-double Scene::lightStartDensity(int light, const Vec3f& towardsEnvironment) const {
-  if (light < 0 || light >= int(lights_.size())) return 0;
-  const double pick = double(lightPickPdf(light));
-  if (light == environmentLight_) return pick * double(environment_->pdf(towardsEnvironment));
-  if (lights_[light].isPoint()) return pick;
-  return pick / double(lights_[light].area);
-}
-
-double Scene::lightPickProbability(int light) const {
-  if (light < 0 || light >= int(lights_.size())) return 0;
-  return (lightCdf_[light] - (light > 0 ? lightCdf_[light - 1] : 0.0)) / lightCdf_.back();
-}
-
-double Scene::trianglePickProbability(int light, uint32_t t) const {
-  if (light < 0 || light >= int(lights_.size()) || lights_[light].shape < 0) return 0;
-  const std::vector<double>& cdf = triangleCdf_[lights_[light].shape];
-  if (cdf.empty()) return 1;  // a sphere: one primitive
-  if (t >= cdf.size()) return 0;
-  return (cdf[t] - (t > 0 ? cdf[t - 1] : 0.0)) / cdf.back();
-}
-
 void Scene::sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const {
-  const AreaLight& l = lights_[light];
-  const ShapeDescription& s = desc_.shapes[l.shape];
-  size_t t = 0;
-  if (s.type != ShapeDescription::Type::Sphere) {
-    const std::vector<double>& cdf = triangleCdf_[l.shape];
-    const double target = double(u[0]) * cdf.back();
-    t = std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin();
-    t = std::min(t, cdf.size() - 1);
-  }
-  pointOnPrimitive(s, uint32_t(t), {u[1], u[2]}, p, n);
+  const ShapeDescription& s = desc_.shapes[size_t(lights_[light].shape)];
+  pointOnPrimitive(s, lights_.pickTriangle(light, u[0]), {u[1], u[2]}, p, n);
 }
 
 }  // namespace farm

@@ -8,9 +8,8 @@
 
 #include "common/scene/bsdf.h"
 #include "common/scene/camera.h"
-#include "common/scene/environment_light.h"
+#include "common/scene/lights.h"
 #include "common/scene/medium.h"
-#include "common/scene/point_light.h"
 #include "common/scene/scene_description.h"
 
 namespace farm {
@@ -40,20 +39,6 @@ struct SurfaceHit {
 struct SurfaceDifferential {
   Vec3f dpdu, dpdv;
   Vec3f ns, dndu, dndv;
-};
-
-// A light: one emitting shape, sampled uniformly by area, emitting on its normal's side; or a
-// point light (point >= 0: Scene::pointLight()); or, with neither, the environment
-// (Scene::environment()), whose path vertices lie at infinity.
-struct AreaLight {
-  int shape = -1;
-  int point = -1;  // index into the scene's point lights
-  Spectrum radiance;
-  float area = 0;
-  float power = 0;  // luminance of radiance * area * pi (twice for two sides): selection weight
-  bool twoSided = false;  // an area light that emits on both sides of its surface
-  bool isEnvironment() const { return shape < 0 && point < 0; }
-  bool isPoint() const { return point >= 0; }
 };
 
 // The adjoint BSDF with shading normals is not the BSDF (Veach 1997, eq. 5.17): particles
@@ -147,59 +132,11 @@ class Scene {
   Bsdf bsdfAt(int shape, const Vec2f& uv) const;
   int lightOf(int shape) const { return shapeLight_[shape]; }  // -1 when not an emitter
 
-  const std::vector<AreaLight>& lights() const { return lights_; }
-  // Chooses a light in proportion to power; *pdf is its discrete probability.
-  int pickLight(float u, float* pdf) const;
-  float lightPickPdf(int light) const;
-  // The density with which a light subpath starts where it does: pickLight's probability of the
-  // light times that of the start on it, the area density 1 / area on an area light, the
-  // coefficient 1 of a point light's delta, and the solid-angle density of the direction
-  // `towardsEnvironment` for the environment. Every estimator's MIS weights take it from here
-  // (pt's weight for a light it hits, BDPT's and the path-space chains' reverse densities, the
-  // chains' seen emission), so that they agree with the sampling they weigh. In double: the
-  // float quotients and products the estimators computed before are this, rounded.
-  double lightStartDensity(int light, const Vec3f& towardsEnvironment = Vec3f(0.0f)) const;
-  // The environment, or null; environmentLight() is its index among lights() (or -1).
-  const EnvironmentLight* environment() const { return environment_.get(); }
-  int environmentLight() const { return environmentLight_; }
-  // Light subpaths leave the environment through a disk of the bounding sphere's radius facing
-  // their direction, uniformly: this is the disk's area density (pbrt-v3's infinite light emits
-  // the same way: a density of directions times one of positions on such a disk).
-  float environmentDiskDensity() const { return 1 / (kPi * extent_ * extent_); }
-  // The point of that disk for two uniform numbers, the disk facing unit direction w (towards
-  // the environment) from outside the scene.
-  Vec3f environmentDiskPoint(const Vec3f& w, const Vec2f& u) const;
-  // Uniform point on an area light; the area density is 1 / area.
+  // The lights: picking one, what they emit, and the densities of starting on them (lights.h).
+  const Lights& lights() const { return lights_; }
+  // A uniform point on area light `light` (its triangle by Lights::pickTriangle from u[0]), and
+  // the emitting side's normal there; the area density is 1 / area.
   void sampleLightPoint(int light, const float u[3], Vec3f* p, Vec3f* n) const;
-  // The probability with which sampleLightPoint picks triangle t of a mesh light, as its CDF
-  // makes it: what the area density 1 / area assumes to be area(t) / area. The CDFs are summed
-  // in double so that this holds for 10^5 triangles of very different sizes (in float, a
-  // triangle smaller than a rounding step of the running sum would get probability 0 or twice
-  // its share).
-  double trianglePickProbability(int light, uint32_t t) const;
-  // The probability with which pickLight picks a light, as its CDF makes it.
-  double lightPickProbability(int light) const;
-  const PointLight& pointLight(int light) const { return pointLights_[lights_[light].point]; }
-  // Radiance leaving light `light` in direction w at a point of normal n; for the environment,
-  // the radiance travelling in direction w, and for a point light its intensity in direction w
-  // (n is not used for either).
-  Spectrum emitted(int light, const Vec3f& n, const Vec3f& w) const {
-    if (light == environmentLight_) return environment_->radiance(-w);
-    if (lights_[light].isPoint()) return pointLight(light).intensity(w);
-    const float c = dot(n, w);
-    return c > 0 || (lights_[light].twoSided && c < 0) ? lights_[light].radiance : Spectrum(0.0f);
-  }
-  // The solid-angle density with which an area light's subpaths leave it in direction w at a
-  // point of normal n: cosine-weighted about n, on a side picked with probability 1/2 when the
-  // light has two.
-  float emissionPdf(int light, const Vec3f& n, const Vec3f& w) const {
-    const float c = dot(n, w);
-    return lights_[light].twoSided ? 0.5f * kInvPi * std::fabs(c) : (c > 0 ? c * kInvPi : 0.0f);
-  }
-  // A direction of an area light's emission, in its local frame (z along n), with emissionPdf's
-  // density: cosine-weighted about z, or about -z for the back side, which a two-sided light
-  // picks with the first number (rescaled, so that stratified numbers stay stratified).
-  Vec3f sampleEmission(int light, Vec2f u) const;
 
   // ---- Participating media ----
   // True when the scene has media or surfaces that only bound them: then rays pass null
@@ -259,20 +196,15 @@ class Scene {
   Camera camera_;
   std::vector<Bsdf> bsdfs_;
   std::vector<int> shapeBsdf_, shapeLight_;
-  std::vector<std::vector<double>> triangleCdf_;  // per emitting mesh shape: area CDF
   // Specular surfaces by area: the running total up to each (shape, triangle) entry.
   std::vector<double> specularCdf_;
   std::vector<std::pair<int, uint32_t>> specularPrimitives_;
   std::vector<char> smoothSpecular_;  // per shape, see smoothSpecularShape
   bool anySmoothSpecular_ = false;
-  std::vector<AreaLight> lights_;
-  std::vector<double> lightCdf_;
+  Lights lights_;
   float extent_ = 1;
   float reach_ = 1;  // see survivalBeyondReach
   Vec3f center_{0.0f};
-  std::unique_ptr<EnvironmentLight> environment_;
-  std::vector<PointLight> pointLights_;
-  int environmentLight_ = -1;
   std::vector<Medium> media_;
   bool tracksMedia_ = false;
   void* device_ = nullptr;  // RTCDevice

@@ -92,7 +92,7 @@ int BidirectionalTracer::randomWalk(Ray ray, Spectrum beta, float pdfDir, int me
     if (!event.scattered && !found) {
       // A camera subpath that leaves the scene ends on the environment, at infinity: its
       // density there is the direction's.
-      const int environment = scene_.environmentLight();
+      const int environment = scene_.lights().environmentLight();
       if (mode == TransportMode::Radiance && environment >= 0) {
         v = vertexAtInfinity(scene_, environment, ray.o, ray.d);
         v.beta = beta;
@@ -200,13 +200,13 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   Vec2f uDir(sampler.next(kLightStream), sampler.next(kLightStream));
   if (scene_.lights().empty() || maxVertices < 1) return 0;
   float pickPdf;
-  int l = scene_.pickLight(uPick, &pickPdf);
-  const AreaLight& light = scene_.lights()[l];
+  int l = scene_.lights().pick(uPick, &pickPdf);
+  const Light& light = scene_.lights()[l];
   if (light.isEnvironment()) {
     // A direction w towards the environment by its importance, and a ray against it from a
     // point of the disk of the bounding sphere's radius that faces w, outside the scene.
     float pdfDir;
-    const Vec3f w = scene_.environment()->sample(uDir, &pdfDir);
+    const Vec3f w = scene_.lights().environment()->sample(uDir, &pdfDir);
     if (!(pdfDir > 0)) return 0;
     PathVertex& y = path[0];
     y = PathVertex();
@@ -215,10 +215,10 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
     y.light = l;
     y.infinite = true;
     y.pdfFwd = pickPdf * pdfDir;
-    y.beta = scene_.environment()->radiance(w) / y.pdfFwd;
-    y.p = scene_.environmentDiskPoint(w, {uPoint[0], uPoint[1]});
+    y.beta = scene_.lights().environment()->radiance(w) / y.pdfFwd;
+    y.p = scene_.lights().environmentDiskPoint(w, {uPoint[0], uPoint[1]});
     if (maxVertices < 2 || isBlack(y.beta)) return 1;
-    const float pdfDisk = scene_.environmentDiskDensity();
+    const float pdfDisk = scene_.lights().environmentDiskDensity();
     Ray ray;
     ray.o = y.p;
     ray.d = -w;
@@ -228,7 +228,7 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   }
   if (light.isPoint()) {
     // The light's position, then a direction of its emission.
-    const PointLight& point = scene_.pointLight(l);
+    const PointLight& point = scene_.lights().pointLight(l);
     PathVertex& y = path[0];
     y = PathVertex();
     y.kind = PathVertex::Kind::Light;
@@ -259,13 +259,13 @@ int BidirectionalTracer::traceLightSubpath(Sampler& sampler, int maxVertices, bo
   y.shape = light.shape;
   y.light = l;
   y.medium = scene_.mediumAt(scene_.spawnRay(p, n, n).o);
-  float pdfPos = float(scene_.lightStartDensity(l));
+  float pdfPos = float(scene_.lights().startDensity(l));
   y.pdfFwd = pdfPos;
   y.beta = light.radiance / pdfPos;
   if (maxVertices < 2) return 1;
   // Area lights emit with a cosine distribution: sample it exactly, so beta keeps pi.
-  const Vec3f local = scene_.sampleEmission(l, uDir);
-  float pdfDir = scene_.emissionPdf(l, Vec3f(0, 0, 1), local);
+  const Vec3f local = scene_.lights().sampleEmission(l, uDir);
+  float pdfDir = scene_.lights().emissionPdf(l, Vec3f(0, 0, 1), local);
   if (!(pdfDir > 0)) return 1;
   Vec3f d = Frame(n).toWorld(local);
   Spectrum beta = y.beta * (std::fabs(local.z) / pdfDir);
@@ -279,7 +279,7 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   if (s == 0) {  // the camera subpath found a light by itself
     const PathVertex& z = cameraPath[t - 1];
     if (z.light < 0) return Spectrum(0.0f);
-    return z.beta * scene_.emitted(z.light, z.n, z.wo);
+    return z.beta * scene_.lights().emitted(z.light, z.n, z.wo);
   }
   const PathVertex& y = lightPath[s - 1];
   if (y.delta) return Spectrum(0.0f);
@@ -295,8 +295,8 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
     const float d2 = lengthSquared(d);
     if (!(d2 > 0)) return Spectrum(0.0f);
     const Vec3f w = d / std::sqrt(d2);  // from z towards the light
-    Spectrum f =
-        scatterValue(z, w, TransportMode::Radiance) * scene_.pointLight(y.light).intensity(-w);
+    Spectrum f = scatterValue(z, w, TransportMode::Radiance) *
+                 scene_.lights().pointLight(y.light).intensity(-w);
     if (isBlack(f)) return Spectrum(0.0f);
     const Spectrum T = unblocked(z, y, sampler);
     if (isBlack(T)) return Spectrum(0.0f);
@@ -326,7 +326,8 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
     float We = camera.importance(lens.p, -w);
     Spectrum f;
     if (s == 1) {
-      f = Spectrum(scene_.emissionPdf(y.light, y.n, w) > 0 ? 1.0f : 0.0f);  // its emitting side
+      f = Spectrum(scene_.lights().emissionPdf(y.light, y.n, w) > 0 ? 1.0f
+                                                                    : 0.0f);  // its emitting side
     } else {
       f = scatterValue(y, w, TransportMode::Importance);
     }
@@ -344,7 +345,7 @@ Spectrum BidirectionalTracer::connect(const PathVertex* lightPath, const PathVer
   Spectrum f = scatterValue(z, w, TransportMode::Radiance);
   if (isBlack(f)) return Spectrum(0.0f);
   if (s == 1) {
-    f *= scene_.emissionPdf(y.light, y.n, -w) > 0 ? 1.0f : 0.0f;  // its emitting side
+    f *= scene_.lights().emissionPdf(y.light, y.n, -w) > 0 ? 1.0f : 0.0f;  // its emitting side
   } else {
     f *= scatterValue(y, -w, TransportMode::Importance);
   }
@@ -414,17 +415,17 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
     if (s == 0 && atInfinity(*z)) {
       // z is the environment: its direction's density as a light-subpath start, and the disk's
       // density projected onto z_{t-2}.
-      pL[0] = float(scene_.lightStartDensity(z->light, -z->n));
+      pL[0] = float(scene_.lights().startDensity(z->light, -z->n));
       if (t > 1) {
-        pL[1] = scene_.environmentDiskDensity() * cosineAt(cameraPath[t - 2], z->n);
+        pL[1] = scene_.lights().environmentDiskDensity() * cosineAt(cameraPath[t - 2], z->n);
       }
     } else if (s == 0) {
       // z lies on a light: its density as a light-subpath start, and the emission towards z_{t-2}.
-      pL[0] = float(scene_.lightStartDensity(z->light));
+      pL[0] = float(scene_.lights().startDensity(z->light));
       if (t > 1) {
         const PathVertex& zPrev = cameraPath[t - 2];
         Vec3f w = directionTo(z->p, zPrev.p);
-        pL[1] = toAreaDensity(scene_.emissionPdf(z->light, z->n, w), z->p, zPrev);
+        pL[1] = toAreaDensity(scene_.lights().emissionPdf(z->light, z->n, w), z->p, zPrev);
       }
     } else {
       Vec3f w = directionBetween(*y, *z);
@@ -432,13 +433,13 @@ double BidirectionalTracer::misWeight(const PathVertex* lightPath, const PathVer
       if (s == 1 && atInfinity(*y)) {
         pdf = 0;  // not used: the disk's density, projected, is z's
       } else if (s == 1 && onPointLight(*y)) {
-        pdf = scene_.pointLight(y->light).directionPdf(w);
+        pdf = scene_.lights().pointLight(y->light).directionPdf(w);
       } else if (s == 1) {
-        pdf = scene_.emissionPdf(y->light, y->n, w);
+        pdf = scene_.lights().emissionPdf(y->light, y->n, w);
       } else {
         pdf = scatterDensity(*y, y->wo, w);
       }
-      pL[s] = atInfinity(*y) ? scene_.environmentDiskDensity() * cosineAt(*z, y->n)
+      pL[s] = atInfinity(*y) ? scene_.lights().environmentDiskDensity() * cosineAt(*z, y->n)
                              : toAreaDensity(pdf, y->p, *z);
       if (t > 1) {  // z_{t-2} sampled from z, arriving from y
         const PathVertex& zPrev = cameraPath[t - 2];

@@ -80,7 +80,7 @@ bool Path::isSpecular(const Scene& scene, int i) const {
 bool Path::isSeenEmission(const Scene& scene) const {
   if (length() != 1 || vertices[0].light < 0) return false;
   // A point light cannot be hit and the environment is not path-space MLT's: only area lights.
-  const AreaLight& light = scene.lights()[size_t(vertices[0].light)];
+  const Light& light = scene.lights()[size_t(vertices[0].light)];
   return !light.isPoint() && !light.isEnvironment();
 }
 
@@ -148,7 +148,7 @@ PathContribution Path::contribution(const Scene& scene, int maxDepth,
   double d2;
   Vec3f w = direction(0, 1, &d2);
   if (!(d2 > 0)) return out;
-  f.multiply(scene.emitted(x0.light, x0.n, w));
+  f.multiply(scene.lights().emitted(x0.light, x0.n, w));
   // Edges into surface vertices, and the scattering there.
   for (int i = 0; i + 1 < k; ++i) {
     const PathVertex& sender = vertices[size_t(i)];
@@ -300,7 +300,7 @@ bool Path::deserialize(const std::string& bytes, const Scene& scene) {
         return false;
     } else if (v.infinite) {
       // The environment's direction: only x_0, a unit direction.
-      if (i != 0 || light != scene.environmentLight() || light < 0 || shape != -1 ||
+      if (i != 0 || light != scene.lights().environmentLight() || light < 0 || shape != -1 ||
           primitive != -1 || medium != -1 || std::fabs(farm::length(v.n) - 1) > 1e-3f)
         return false;
     } else if (!isCamera && shape == -1 && i == 0 && v.kind == PathVertex::Kind::Light) {

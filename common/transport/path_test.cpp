@@ -245,7 +245,7 @@ TEST(Path, DeserializeTakesTheEnvironmentsVertexAsTheLightEndOnly) {
   RenderSettings settings;
   settings.width = settings.height = 16;
   auto scene = loadScene(std::string(FARM_TEST_DATA_DIR) + "/sky/scene.pbrt", settings);
-  ASSERT_GE(scene->environmentLight(), 0);
+  ASSERT_GE(scene->lights().environmentLight(), 0);
   Path x;
   BidirectionalTracer tracer(*scene, 4);
   Rng rng(3, 3);
@@ -267,7 +267,7 @@ TEST(Path, DeserializeTakesTheEnvironmentsVertexAsTheLightEndOnly) {
   bad[0].n = bad[0].n * 2.0f;  // not a direction
   EXPECT_FALSE(y.deserialize(bad.serialize(), *scene));
   bad = x;
-  bad[0].light = scene->environmentLight() + 1;  // not the environment
+  bad[0].light = scene->lights().environmentLight() + 1;  // not the environment
   EXPECT_FALSE(y.deserialize(bad.serialize(), *scene));
   bad = x;
   bad[1] = x[0];  // at infinity in the middle of the path

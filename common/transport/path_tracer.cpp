@@ -23,13 +23,13 @@ void PathTracer::nextEvent(const Vec3f& p, const Vec3f& n, const Spectrum& beta,
                            const float uLight[4], Sampler& sampler, const Scatter& scatter,
                            bool record, const Add& add) const {
   float pickPdf;
-  const int l = scene_.pickLight(uLight[0], &pickPdf);
+  const int l = scene_.lights().pick(uLight[0], &pickPdf);
   Spectrum fs;
   float scatterPdf;
   int medium;
   if (scene_.lights()[l].isPoint()) {
     // The light's position; no scattering sample reaches a point, so no MIS.
-    const PointLight& point = scene_.pointLight(l);
+    const PointLight& point = scene_.lights().pointLight(l);
     const Vec3f d = point.position() - p;
     const float d2 = lengthSquared(d);
     if (!(d2 > 0)) return;
@@ -47,12 +47,12 @@ void PathTracer::nextEvent(const Vec3f& p, const Vec3f& n, const Spectrum& beta,
       lightVertex.light = l;
     }
     add(beta * fs * I * T / (d2 * pickPdf), &lightVertex);
-  } else if (l == scene_.environmentLight()) {
+  } else if (l == scene_.lights().environmentLight()) {
     // A direction of the environment, by its importance; unblocked, it reaches it.
     float pdfDir;
-    const Vec3f wiW = scene_.environment()->sample({uLight[1], uLight[2]}, &pdfDir);
+    const Vec3f wiW = scene_.lights().environment()->sample({uLight[1], uLight[2]}, &pdfDir);
     if (!(pdfDir > 0)) return;
-    const Spectrum Le = scene_.environment()->radiance(wiW);
+    const Spectrum Le = scene_.lights().environment()->radiance(wiW);
     if (isBlack(Le) || !scatter(wiW, &fs, &scatterPdf, &medium)) return;
     const float pdfLight = pickPdf * pdfDir;
     ++rays_;
@@ -68,10 +68,10 @@ void PathTracer::nextEvent(const Vec3f& p, const Vec3f& n, const Spectrum& beta,
     const float d2 = lengthSquared(d);
     if (!(d2 > 0)) return;
     const Vec3f wiW = d / std::sqrt(d2);
-    const Spectrum Le = scene_.emitted(l, nl, -wiW);
+    const Spectrum Le = scene_.lights().emitted(l, nl, -wiW);
     const float cosL = absDot(nl, wiW);
     if (isBlack(Le) || !(cosL > 0) || !scatter(wiW, &fs, &scatterPdf, &medium)) return;
-    const float pdfLight = float(scene_.lightStartDensity(l)) * d2 / cosL;
+    const float pdfLight = float(scene_.lights().startDensity(l)) * d2 / cosL;
     ++rays_;
     const Spectrum T = scene_.transmittance(p, n, pl, nl, medium, sampler, kCameraStream);
     if (isBlack(T)) return;
@@ -170,16 +170,16 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     }
 
     if (!found) {
-      const int environment = scene_.environmentLight();
+      const int environment = scene_.lights().environmentLight();
       if (environment < 0) break;
       // The ray leaves the scene: the environment's radiance from its direction.
       if (vertices) vertices->push_back(vertexAtInfinity(scene_, environment, ray.o, ray.d));
-      Spectrum Le = scene_.environment()->radiance(ray.d);
+      Spectrum Le = scene_.lights().environment()->radiance(ray.d);
       if (!isBlack(Le)) {
         if (previousDelta) {
           add(beta * Le, nullptr);
         } else {
-          float pdfLight = float(scene_.lightStartDensity(environment, ray.d));
+          float pdfLight = float(scene_.lights().startDensity(environment, ray.d));
           add(beta * Le * powerHeuristic(previousPdf, pdfLight), nullptr);
         }
       }
@@ -188,7 +188,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
     const int light = scene_.lightOf(hit.shape);
     if (vertices) vertices->push_back(surfaceVertex(scene_, hit));
     if (light >= 0) {
-      Spectrum Le = scene_.emitted(light, hit.ng, -ray.d);
+      Spectrum Le = scene_.lights().emitted(light, hit.ng, -ray.d);
       if (!isBlack(Le)) {
         if (previousDelta) {
           add(beta * Le, nullptr);
@@ -196,7 +196,7 @@ void PathTracer::walk(const Ray& primary, Sampler& sampler, std::vector<PathVert
           // The same path could have come from next-event estimation: weight both (eq. 9.13).
           float d2 = lengthSquared(hit.p - previousP);
           float cosL = absDot(hit.ng, ray.d);
-          float pdfLight = float(scene_.lightStartDensity(light)) * d2 / cosL;
+          float pdfLight = float(scene_.lights().startDensity(light)) * d2 / cosL;
           add(beta * Le * powerHeuristic(previousPdf, pdfLight), nullptr);
         }
       }

@@ -85,18 +85,20 @@ void pathDensities(const Scene& scene, const PathVertex* const* x, int n, double
   const PathVertex& x0 = *x[0];
   if (atInfinity(x0)) {
     // The environment: its direction's density, then the disk's projected onto x_1.
-    const EnvironmentLight* environment = scene.environment();
-    pL[0] = environment ? scene.lightStartDensity(x0.light, -x0.n) : 0.0;
-    if (n > 2) pL[1] = double(scene.environmentDiskDensity()) * double(cosineAt(*x[1], x0.n));
+    const EnvironmentLight* environment = scene.lights().environment();
+    pL[0] = environment ? scene.lights().startDensity(x0.light, -x0.n) : 0.0;
+    if (n > 2)
+      pL[1] = double(scene.lights().environmentDiskDensity()) * double(cosineAt(*x[1], x0.n));
   } else if (onPointLight(x0)) {
     // The position's delta coefficient, then the emission's direction density.
-    pL[0] = scene.lightStartDensity(x0.light);
+    pL[0] = scene.lights().startDensity(x0.light);
     const Vec3f w = normalize(x[1]->p - x0.p);
-    pL[1] = toAreaDensity(scene.pointLight(x0.light).directionPdf(w), x0.p, x[1]->p, x[1]->n);
+    pL[1] =
+        toAreaDensity(scene.lights().pointLight(x0.light).directionPdf(w), x0.p, x[1]->p, x[1]->n);
   } else if (x0.light >= 0) {
-    pL[0] = scene.lightStartDensity(x0.light);
+    pL[0] = scene.lights().startDensity(x0.light);
     Vec3f w = normalize(x[1]->p - x0.p);
-    pL[1] = toAreaDensity(scene.emissionPdf(x0.light, x0.n, w), x0.p, x[1]->p, x[1]->n);
+    pL[1] = toAreaDensity(scene.lights().emissionPdf(x0.light, x0.n, w), x0.p, x[1]->p, x[1]->n);
   }
   for (int i = 2; i < n - 1; ++i) {
     const PathVertex& prev = *x[i - 1];

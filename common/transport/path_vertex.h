@@ -39,7 +39,7 @@ struct PathVertex {
 // direction its light travels in (into the scene), p a point far along the other way (never
 // used for directions: see directionBetween), and its densities are solid-angle densities of
 // that direction, from either side; the vertex after it, sampled from its side, has the area
-// density of the environment's disk times that vertex's cosine (Scene::environmentDiskDensity).
+// density of the environment's disk times that vertex's cosine (Lights::environmentDiskDensity).
 inline bool atInfinity(const PathVertex& v) {
   return v.kind == PathVertex::Kind::Light && v.infinite;
 }

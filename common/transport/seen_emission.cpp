@@ -18,7 +18,7 @@ void SeenEmission::densities(int light, const Vec3f& y, const Vec3f& n, double* 
   const Vec3f w = d / float(std::sqrt(d2));
   // The film point's direction density We(w), turned into an area density at y.
   *film = d2 > 0 ? double(camera.importance(camera.position(), w)) * absDot(n, w) / d2 : 0.0;
-  *lightPoint = scene_.lightStartDensity(light);
+  *lightPoint = scene_.lights().startDensity(light);
 }
 
 void SeenEmission::sample(const Vec2f& film, Rng& rng, std::vector<Splat>* splats) const {
@@ -33,7 +33,7 @@ void SeenEmission::sample(const Vec2f& film, Rng& rng, std::vector<Splat>* splat
   if (scene_.intersect(ray, &hit)) {
     const int light = scene_.lightOf(hit.shape);
     if (light >= 0) {
-      const Spectrum Le = scene_.emitted(light, hit.ng, -ray.d);
+      const Spectrum Le = scene_.lights().emitted(light, hit.ng, -ray.d);
       if (!isBlack(Le)) {
         densities(light, hit.p, hit.ng, &pFilm, &pLight);
         const double weight = pFilm * pFilm / (pFilm * pFilm + pLight * pLight);
@@ -47,8 +47,8 @@ void SeenEmission::sample(const Vec2f& film, Rng& rng, std::vector<Splat>* splat
   const float uPoint[3] = {rng.nextFloat(), rng.nextFloat(), rng.nextFloat()};
   if (scene_.lights().empty()) return;
   float pickPdf;
-  const int light = scene_.pickLight(uPick, &pickPdf);
-  const AreaLight& area = scene_.lights()[size_t(light)];
+  const int light = scene_.lights().pick(uPick, &pickPdf);
+  const Light& area = scene_.lights()[size_t(light)];
   if (area.isPoint() || area.isEnvironment() || !(area.area > 0)) return;
   Vec3f y, n;
   scene_.sampleLightPoint(light, uPoint, &y, &n);
@@ -56,7 +56,7 @@ void SeenEmission::sample(const Vec2f& film, Rng& rng, std::vector<Splat>* splat
   const float d2 = lengthSquared(toCamera);
   if (!(d2 > 0)) return;
   const Vec3f w = toCamera / std::sqrt(d2);
-  const Spectrum Le = scene_.emitted(light, n, w);
+  const Spectrum Le = scene_.lights().emitted(light, n, w);
   Vec2f point;
   if (isBlack(Le) || !camera.project(camera.position(), -w, &point)) return;
   densities(light, y, n, &pFilm, &pLight);

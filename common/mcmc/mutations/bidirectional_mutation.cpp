@@ -136,7 +136,7 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
       if (!sampleLightVertex(scene, uPick, u, &v)) return false;
     } else if (index == 1) {
       // Its emission, as BDPT's light subpaths leave: a point light's direction by its own
-      // distribution, an area light's by Scene::sampleEmission, the environment's along its
+      // distribution, an area light's by Lights::sampleEmission, the environment's along its
       // direction from a point of the disk facing it.
       const PathVertex& source = y->vertices[0];
       Vec2f u(rng.nextFloat(), rng.nextFloat());
@@ -148,10 +148,10 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
       }
       if (onPointLight(source)) {
         float pdf;
-        w = scene.pointLight(source.light).sampleDirection(u, &pdf);
+        w = scene.lights().pointLight(source.light).sampleDirection(u, &pdf);
         if (!(pdf > 0)) return false;
       } else {
-        const Vec3f local = scene.sampleEmission(source.light, u);
+        const Vec3f local = scene.lights().sampleEmission(source.light, u);
         if (!(local.z != 0)) return false;
         w = normalize(Frame(source.n).toWorld(local));
       }
@@ -186,7 +186,7 @@ bool BidirectionalMutation::propose(const Path& x, Rng& rng, Path* y,
     // The vertex that becomes x_0 may be the environment's, where the ray leaves the scene
     // (path-space chains take an environment only without media).
     const bool mayEscape =
-        scene.environmentLight() >= 0 && !media && L + sLight == 0 && j == tCamera - 1;
+        scene.lights().environmentLight() >= 0 && !media && L + sLight == 0 && j == tCamera - 1;
     if (at.kind == PathVertex::Kind::Camera) {
       Vec2f film(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
       const Vec3f w = camera.generateRay(film, at.p).d;

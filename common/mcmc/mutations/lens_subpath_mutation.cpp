@@ -47,7 +47,7 @@ bool LensSubpathMutation::propose(const Path& x, Rng& rng, Path* y, MutationReco
   int medium = scene.hasMedia() ? scene.cameraMedium() : -1;  // the flight's
   // Where x_m is the light, a ray that leaves the scene may end on the environment (path-space
   // chains take one only without media).
-  const bool mayEscape = m == 0 && scene.environmentLight() >= 0 && !scene.hasMedia();
+  const bool mayEscape = m == 0 && scene.lights().environmentLight() >= 0 && !scene.hasMedia();
   for (;;) {
     PathVertex v;
     bool escaped = false;

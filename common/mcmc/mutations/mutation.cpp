@@ -83,8 +83,8 @@ bool traceOrEscape(const MutationContext& context, const PathVertex& from, const
     case Traced::Surface:
       return true;
     case Traced::LeftTheScene:
-      if (scene.environmentLight() < 0 || scene.hasMedia()) return false;
-      *hit = vertexAtInfinity(scene, scene.environmentLight(), from.p, w);
+      if (scene.lights().environmentLight() < 0 || scene.hasMedia()) return false;
+      *hit = vertexAtInfinity(scene, scene.lights().environmentLight(), from.p, w);
       *escaped = true;
       return true;
     case Traced::Lost:
@@ -213,12 +213,12 @@ Vec3f aimedDirection(const Scene& scene, const PathVertex& from, const Vec3f& po
 bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVertex* v) {
   if (scene.lights().empty()) return false;
   float pickPdf;
-  const int light = scene.pickLight(uPick, &pickPdf);
-  const AreaLight& info = scene.lights()[size_t(light)];
+  const int light = scene.lights().pick(uPick, &pickPdf);
+  const Light& info = scene.lights()[size_t(light)];
   if (info.isEnvironment()) {
     // A direction towards the environment by its importance; the vertex lies along it.
     float pdf;
-    const Vec3f w = scene.environment()->sample(Vec2f(u[0], u[1]), &pdf);
+    const Vec3f w = scene.lights().environment()->sample(Vec2f(u[0], u[1]), &pdf);
     if (!(pdf > 0)) return false;
     *v = vertexAtInfinity(scene, light, scene.center(), w);
     return true;
@@ -228,7 +228,7 @@ bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVe
   v->light = light;
   v->shape = info.shape;
   if (info.isPoint()) {
-    v->p = scene.pointLight(light).position();
+    v->p = scene.lights().pointLight(light).position();
   } else {
     scene.sampleLightPoint(light, u, &v->p, &v->n);
     v->ns = v->n;
@@ -240,7 +240,7 @@ bool traceFromEnvironment(const MutationContext& context, const PathVertex& x0, 
                           PathVertex* hit) {
   // As BDPT's light subpaths leave the environment (BidirectionalTracer::traceLightSubpath).
   PathVertex start;
-  start.p = context.scene.environmentDiskPoint(-x0.n, u);
+  start.p = context.scene.lights().environmentDiskPoint(-x0.n, u);
   return traceVertex(context, start, x0.n, hit);
 }
 

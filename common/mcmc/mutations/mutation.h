@@ -143,7 +143,7 @@ bool sampleLightVertex(const Scene& scene, float uPick, const float u[3], PathVe
 
 // The first vertex of a light subpath from the environment vertex x0: a point of the disk of
 // the bounding sphere's radius that faces x0's direction (u, uniformly: density
-// Scene::environmentDiskDensity), and the surface the ray from it along x0's light hits. False
+// Lights::environmentDiskDensity), and the surface the ray from it along x0's light hits. False
 // when it misses the scene.
 bool traceFromEnvironment(const MutationContext& context, const PathVertex& x0, const Vec2f& u,
                           PathVertex* hit);
