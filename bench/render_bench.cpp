@@ -1,11 +1,22 @@
 // Rays per second and samples per second of each estimator on the shared scenes, single
 // threaded (one chain), so that the figures compare the algorithms, not the scheduler.
 //   build/bin/farm_bench --benchmark_filter=Cornell
+//
+// BM_Share sets each algorithm beside the hardware (issue 45): on every shared scene, the rays an
+// algorithm traces (logged: Scene::setRayLog) are traced again by Embree alone, in their order
+// and with nothing worked out of the hits (Scene::traceLoggedRays), which is the rate the core
+// allows for that algorithm's own mix of closest hits and occlusion tests, their directions and
+// lengths. It reports the algorithm's rays/s, that rate ("embree rays/s"), the share of it the
+// algorithm reaches, its work (samples, mutations or seeds) per second and the bytes it allocates
+// per unit of work (through operator new, counted here), beyond what each run of a work unit
+// allocates whatever its length (its flush's film).
+//   build/bin/farm_bench --benchmark_filter=Share
 #include <benchmark/benchmark.h>
 
 #include <chrono>
 #include <string>
 
+#include "bench/allocation_count.h"
 #include "bench/chain_bench.h"
 #include "common/mcmc/bootstrap.h"
 #include "common/render/render_job.h"
@@ -64,6 +75,98 @@ void BM_Chain(benchmark::State& state, const char* name, Algorithm algorithm) {
   runChainIterations(state, job, job.planChains(job.bootstrap())[0], erpt ? 1024 : 20000,
                      erpt ? "seeds/s" : "mutations/s");
 }
+
+// One work unit of `algorithm` on a shared scene at 256 pixels wide, run again and again to
+// `work` samples, mutations or seeds (the bootstrap excluded), against Embree's rate on the rays
+// the same work traces.
+void BM_Share(benchmark::State& state, const char* name, const char* file, Algorithm algorithm) {
+  RenderSettings s;
+  s.algorithm = algorithm;
+  s.width = 256;
+  s.bootstrapSamples = 1 << 15;
+  s.numChains = 1;
+  auto scene = loadScene(std::string(FARM_SHARED_DIR) + "/scenes/" + name + "/" + file, s);
+  RenderJob job(scene, s, "bench");
+  const ChainSpec first = job.planChains(job.bootstrap())[0];
+  const bool samples = algorithm == Algorithm::PathTracing || algorithm == Algorithm::Bidirectional;
+  const int64_t work = samples ? 16384 : algorithm == Algorithm::ERPT ? 256 : 20000;
+  int64_t done = 0, rays = 0;
+  auto run = [&](int64_t budget) {
+    ChainSpec spec = first;
+    spec.budget = budget;
+    spec.flushInterval = budget;
+    job.runChain(spec, [&](ChainFlush&& f) {
+      done += f.mutations;
+      rays += f.rays;
+      return true;
+    });
+  };
+  // Embree's rate on this work's rays, over at least half a second of replays.
+  RayLog log;
+  scene->setRayLog(&log);
+  run(work);
+  scene->setRayLog(nullptr);
+  using Clock = std::chrono::steady_clock;
+  int64_t replayed = 0, hits = 0;
+  const auto replayStart = Clock::now();
+  double replaySeconds = 0;
+  while (replaySeconds < 0.5) {
+    hits += scene->traceLoggedRays(log);
+    replayed += int64_t(log.rays.size());
+    replaySeconds = std::chrono::duration<double>(Clock::now() - replayStart).count();
+  }
+  benchmark::DoNotOptimize(hits);
+  const double embreeRate = double(replayed) / replaySeconds;
+
+  // What a run allocates whatever its work (its flush's film above all, 36 bytes a pixel): a run
+  // of one unit of work, left out of the bytes per unit.
+  int64_t allocatedBefore = allocatedBytes();
+  run(1);
+  const double perRun = double(allocatedBytes() - allocatedBefore);
+
+  done = rays = 0;
+  int64_t runs = 0;
+  allocatedBefore = allocatedBytes();
+  const auto start = Clock::now();
+  for (auto _ : state) {
+    run(work);
+    ++runs;
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const double bytes = double(allocatedBytes() - allocatedBefore) - perRun * double(runs);
+  state.counters["rays/s"] = double(rays) / seconds;
+  state.counters["embree rays/s"] = embreeRate;
+  state.counters["share"] = double(rays) / seconds / embreeRate;
+  state.counters["work/s"] = double(done) / seconds;
+  state.counters["bytes/work"] = done > 0 ? bytes / double(done) : 0.0;
+}
+
+#define FARM_SHARE(scene, label, file)                                            \
+  BENCHMARK_CAPTURE(BM_Share, label##Pt, scene, file, Algorithm::PathTracing)     \
+      ->MinTime(1.0)                                                              \
+      ->Unit(benchmark::kMillisecond);                                            \
+  BENCHMARK_CAPTURE(BM_Share, label##Bdpt, scene, file, Algorithm::Bidirectional) \
+      ->MinTime(1.0)                                                              \
+      ->Unit(benchmark::kMillisecond);                                            \
+  BENCHMARK_CAPTURE(BM_Share, label##Pssmlt, scene, file, Algorithm::PSSMLT)      \
+      ->MinTime(1.0)                                                              \
+      ->Unit(benchmark::kMillisecond);                                            \
+  BENCHMARK_CAPTURE(BM_Share, label##Mmlt, scene, file, Algorithm::MMLT)          \
+      ->MinTime(1.0)                                                              \
+      ->Unit(benchmark::kMillisecond);                                            \
+  BENCHMARK_CAPTURE(BM_Share, label##Mlt, scene, file, Algorithm::MLT)            \
+      ->MinTime(1.0)                                                              \
+      ->Unit(benchmark::kMillisecond);                                            \
+  BENCHMARK_CAPTURE(BM_Share, label##Erpt, scene, file, Algorithm::ERPT)          \
+      ->MinTime(1.0)                                                              \
+      ->Unit(benchmark::kMillisecond)
+
+FARM_SHARE("cornell-box", Cornell, "scene.xml");
+FARM_SHARE("cornell-box-pbrt", CornellPbrt, "scene.pbrt");
+FARM_SHARE("veach-ajar", VeachAjar, "scene.pbrt");
+FARM_SHARE("veach-bidir", VeachBidir, "scene.xml");
+FARM_SHARE("veach-mis", VeachMis, "scene.xml");
+FARM_SHARE("water-caustic", WaterCaustic, "scene.xml");
 
 BENCHMARK_CAPTURE(BM_PathTracing, Cornell, "cornell-box")->MinTime(2.0);
 BENCHMARK_CAPTURE(BM_Bidirectional, Cornell, "cornell-box")->MinTime(2.0);

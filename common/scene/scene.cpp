@@ -86,6 +86,26 @@ bool continuousShading(const ShapeDescription& s) {
   return true;
 }
 
+// An Embree ray from o along d up to tFar; with a hit record, no hit yet.
+RTCRay embreeRay(const Vec3f& o, const Vec3f& d, float tFar) {
+  RTCRay ray;
+  ray.org_x = o.x, ray.org_y = o.y, ray.org_z = o.z;
+  ray.dir_x = d.x, ray.dir_y = d.y, ray.dir_z = d.z;
+  ray.tnear = 0;
+  ray.tfar = tFar;
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0;
+  return ray;
+}
+RTCRayHit embreeRayHit(const Vec3f& o, const Vec3f& d, float tFar) {
+  RTCRayHit rh;
+  rh.ray = embreeRay(o, d, tFar);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
 // A point of primitive t of shape s (a whole sphere, or triangle t of a mesh), uniform by area
 // from u, and its normal (the emitting side's, for lights). False for a degenerate triangle.
 bool pointOnPrimitive(const ShapeDescription& s, uint32_t t, const Vec2f& u, Vec3f* p, Vec3f* n) {
@@ -287,17 +307,10 @@ bool Scene::intersect(const Ray& r, SurfaceHit* hit) const {
 bool Scene::intersect(const Ray& r, SurfaceHit* hit, bool everyShape) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRayHit rh;
-  rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
-  rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
-  rh.ray.tnear = 0;
-  rh.ray.tfar = r.tMax;
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.ray.flags = 0;
-  rh.ray.time = 0;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  RTCRayHit rh = embreeRayHit(r.o, r.d, r.tMax);
   rtcIntersect1(static_cast<RTCScene>(scene_), &context, &rh);
+  if (rayLog_)
+    rayLog_->rays.push_back({r.o, r.d, r.tMax, false, rh.hit.geomID != RTC_INVALID_GEOMETRY_ID});
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
   const int shape = int(rh.hit.geomID);
@@ -411,16 +424,27 @@ void Scene::offsetEnds(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const 
 bool Scene::occluded(const Vec3f& o, const Vec3f& d, float tFar) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRay ray;
-  ray.org_x = o.x, ray.org_y = o.y, ray.org_z = o.z;
-  ray.dir_x = d.x, ray.dir_y = d.y, ray.dir_z = d.z;
-  ray.tnear = 0;
-  ray.tfar = tFar;
-  ray.mask = 0xFFFFFFFFu;
-  ray.flags = 0;
-  ray.time = 0;
+  RTCRay ray = embreeRay(o, d, tFar);
   rtcOccluded1(static_cast<RTCScene>(scene_), &context, &ray);
+  if (rayLog_) rayLog_->rays.push_back({o, d, tFar, true, ray.tfar < 0});
   return ray.tfar < 0;  // Embree sets tfar to -inf on a hit
+}
+
+int64_t Scene::traceLoggedRays(const RayLog& log) const {
+  int64_t hits = 0;
+  for (const RayLog::Entry& e : log.rays) {
+    RTCIntersectContext context;  // as intersect() and occluded() make it, each ray its own
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh = embreeRayHit(e.o, e.d, e.tFar);
+    if (e.occlusion) {
+      rtcOccluded1(static_cast<RTCScene>(scene_), &context, &rh.ray);
+      hits += rh.ray.tfar < 0;
+    } else {
+      rtcIntersect1(static_cast<RTCScene>(scene_), &context, &rh);
+      hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    }
+  }
+  return hits;
 }
 
 bool Scene::visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1) const {

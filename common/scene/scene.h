@@ -36,6 +36,18 @@ struct SurfaceHit {
 // basis (dpdu, dpdv) of the tangent plane (perpendicular to the geometric normal), the unit
 // shading normal ns and its derivatives along dpdu and dpdv (zero where the shading normal is
 // the face's own; the derivative of the normalized interpolated vertex normal on a smooth mesh).
+// The rays a scene traced, for the benchmark that sets the estimators' ray rates beside Embree's
+// own on the same rays (Scene::setRayLog, bench/render_bench.cpp).
+struct RayLog {
+  struct Entry {
+    Vec3f o, d;
+    float tFar;
+    bool occlusion;  // an occlusion test, else a closest hit
+    bool hit;        // what it found: something within tFar
+  };
+  std::vector<Entry> rays;
+};
+
 struct SurfaceDifferential {
   Vec3f dpdu, dpdv;
   Vec3f ns, dndu, dndv;
@@ -89,6 +101,12 @@ class Scene {
 
   // Closest hit along r within (0, r.tMax); false when the ray leaves the scene.
   bool intersect(const Ray& r, SurfaceHit* hit) const;
+  // While a log is set, every ray the scene traces (closest hits and occlusion tests, whichever
+  // query asked) is appended to it. For one thread: set it only where one thread renders.
+  void setRayLog(RayLog* log) const { rayLog_ = log; }
+  // The logged rays traced by Embree alone, in their order, with nothing worked out of the hits:
+  // what the hardware and Embree allow for that mix of rays. Returns how many hit.
+  int64_t traceLoggedRays(const RayLog& log) const;
   // True when nothing blocks the segment between two points; pass n = 0 for a point (camera).
   bool visible(const Vec3f& p0, const Vec3f& n0, const Vec3f& p1, const Vec3f& n1) const;
   // True when nothing blocks the ray from p (geometric normal ng) in direction w: it reaches
@@ -210,6 +228,7 @@ class Scene {
   void* device_ = nullptr;  // RTCDevice
   void* scene_ = nullptr;   // RTCScene
   bool hasNullBoundaries_ = false;
+  mutable RayLog* rayLog_ = nullptr;
 };
 
 }  // namespace farm
