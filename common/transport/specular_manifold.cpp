@@ -144,16 +144,31 @@ bool isSpecularChain(const Scene& scene, const Path& x, int a, int b) {
   return true;
 }
 
+namespace {
+// specularChainDerivative's arrays (see there).
+struct ChainSystem {
+  std::vector<VertexGeometry> geometry;
+  std::vector<ConstraintBlocks> blocks;
+  std::vector<Matrix2> diag, rhs, solution;
+};
+}  // namespace
+
 bool specularChainDerivative(const Scene& scene, const Path& x, int a, int b, bool moveEnd,
                              Matrix2* derivative) {
   if (!isSpecularChain(scene, x, a, b)) return false;
   if (!moveEnd && x[a].shape < 0) return false;  // a point light does not move
   const int n = b - a - 1;                       // specular vertices, rows of the system
-  std::vector<VertexGeometry> g(static_cast<size_t>(n + 2));
+  // The solve's arrays, kept per thread and refilled: the manifold walk solves at every step of
+  // every walk (17 million times in a few seconds of the water caustic's bootstrap and chains),
+  // and five fresh vectors a time were the chains' largest allocation (docs/speed.md).
+  thread_local ChainSystem system;
+  std::vector<VertexGeometry>& g = system.geometry;
+  g.assign(static_cast<size_t>(n + 2), VertexGeometry());
   for (int i = 0; i < n + 2; ++i) {
     if (!geometryOf(scene, x[a + i], i > 0 && i <= n, &g[size_t(i)])) return false;
   }
-  std::vector<ConstraintBlocks> blocks(static_cast<size_t>(n));
+  std::vector<ConstraintBlocks>& blocks = system.blocks;
+  blocks.assign(static_cast<size_t>(n), ConstraintBlocks());
   for (int r = 0; r < n; ++r) {
     if (!constraintBlocks(scene, x[a + 1 + r], g[size_t(r)], g[size_t(r + 1)], g[size_t(r + 2)],
                           &blocks[size_t(r)]))
@@ -162,7 +177,9 @@ bool specularChainDerivative(const Scene& scene, const Path& x, int a, int b, bo
   // A du = rhs with A block tridiagonal (rows r: previous, self, next) and the moved end's
   // column on the right: -next of the last row (moveEnd) or -previous of the first.
   // Block Thomas algorithm: forward elimination, then back substitution.
-  std::vector<Matrix2> diag(static_cast<size_t>(n)), rhs(static_cast<size_t>(n));
+  std::vector<Matrix2>&diag = system.diag, &rhs = system.rhs;
+  diag.assign(static_cast<size_t>(n), Matrix2());
+  rhs.assign(static_cast<size_t>(n), Matrix2());
   for (int r = 0; r < n; ++r) diag[size_t(r)] = blocks[size_t(r)].self;
   Matrix2 zero;
   for (int r = 0; r < n; ++r) rhs[size_t(r)] = zero;
@@ -178,7 +195,8 @@ bool specularChainDerivative(const Scene& scene, const Path& x, int a, int b, bo
     diag[size_t(r)] = diag[size_t(r)] - w * blocks[size_t(r - 1)].next;
     rhs[size_t(r)] = rhs[size_t(r)] - w * rhs[size_t(r - 1)];
   }
-  std::vector<Matrix2> solution(static_cast<size_t>(n));
+  std::vector<Matrix2>& solution = system.solution;
+  solution.assign(static_cast<size_t>(n), Matrix2());
   for (int r = n - 1; r >= 0; --r) {
     Matrix2 inv;
     if (!inverse(diag[size_t(r)], &inv)) return false;

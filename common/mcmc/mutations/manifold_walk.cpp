@@ -74,7 +74,7 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
   if (!isSpecularChain(scene, x, a, b) || target.kind != PathVertex::Kind::Surface)
     return lose(WalkLoss::kNotAChain);
   const double tolerance = manifoldWalkTolerance(scene, target.p);
-  Path current = x;
+  Path current = x, trial;
   double beta = 1;
   int projections = 0;
   for (int step = 0;; ++step) {
@@ -96,14 +96,14 @@ bool manifoldWalk(const MutationContext& context, const Path& x, int a, int b,
     while (!moved) {
       const Vec3f q = current[a + 1].p + first.s * float(beta * su) + first.t * float(beta * sv);
       if (++projections > kMaxProjections) return lose(WalkLoss::kProjectionCap);
-      Path trial = current;
+      trial = current;  // into trial's own storage: a walk allocates its two paths once
       // Aimed from where the ray leaves x_a (a little off its surface), so that it meets x_{a+1}'s
       // surface at q itself: aimed from x_a, it would land a little beside q, the same little
       // every step, and the walk would stall there.
       const Vec3f w = aimedDirection(scene, current[a], q);
       if (project(context, x, a, b, w, &trial) &&
           double(length(target.p - trial[b].p)) < distance) {
-        current = std::move(trial);
+        std::swap(current, trial);
         beta = std::min(1.0, 2 * beta);
         moved = true;
       } else {
