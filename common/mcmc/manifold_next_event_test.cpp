@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -363,8 +364,9 @@ PathVertex floorPoint(const MutationContext& context, float x, float z) {
 // (1 - F_1)(1 - F_2) |d omega_y / dA_z| / G(y, z), with y z E the direct path (f does not test
 // visibility). (On a sphere the two refractions' Dirac Jacobians cancel, the chord meeting both
 // surfaces at one angle, so that an error common to them goes unseen here; the pools' tests see
-// a single refraction's.) The cell at the focus is left out: there |d omega_y / dA_z| has no bound
-// and either mean, of a few thousand values, lands anywhere within tens of percent of the other.
+// a single refraction's.) The cells at the focus are left out: there |d omega_y / dA_z| has no
+// bound and either mean, of a few thousand values, lands anywhere within tens of percent of the
+// other.
 TEST(ManifoldNextEvent, ChainsThroughTheGlassBallCarryWhatLightTracedThroughItDelivers) {
   RenderSettings settings;
   settings.width = settings.height = 24;
@@ -381,7 +383,7 @@ TEST(ManifoldNextEvent, ChainsThroughTheGlassBallCarryWhatLightTracedThroughItDe
   // A row of cells 0.02 wide along x, through where the ray from y through the centre lands.
   const float cell = 0.02f, x0 = -1.2f;
   const float zMid = centre.z + (centre.z - y.p.z) * centre.y / (y.p.y - centre.y);
-  const int cells = 120, focus = 66;
+  const int cells = 120;
   Rng rng(7, 1);
 
   constexpr int kPhotons = 1 << 24;
@@ -411,12 +413,16 @@ TEST(ManifoldNextEvent, ChainsThroughTheGlassBallCarryWhatLightTracedThroughItDe
     tracedSq[size_t(b)] += e * e;
   }
 
+  // The focus: the brightest cell of the traced light and the two on either side, where the light
+  // concentrates too (65, and 63-67, as the scene stands).
+  const int focus = int(std::max_element(traced.begin(), traced.end()) - traced.begin());
+  std::printf("the focus: the cell at x %.2f\n", x0 + (focus + 0.5) * cell);
   constexpr int kSamples = 4000;
   int compared = 0;
   uint64_t matched = 0;
   double worstMismatch = 0;
   for (int b = 12; b <= 108; b += 6) {
-    if (b == focus) continue;
+    if (std::abs(b - focus) <= 2) continue;
     const double tracedMean = traced[size_t(b)] / kPhotons;
     const double tracedError =
         std::sqrt((tracedSq[size_t(b)] / kPhotons - tracedMean * tracedMean) / kPhotons);
@@ -464,7 +470,7 @@ TEST(ManifoldNextEvent, ChainsThroughTheGlassBallCarryWhatLightTracedThroughItDe
               (unsigned long long)matched, worstMismatch);
   EXPECT_EQ(compared, 16);
   EXPECT_GT(matched, 10000u);
-  EXPECT_LT(worstMismatch, 1e-3);
+  EXPECT_LT(worstMismatch, 2e-4);
 }
 
 }  // namespace

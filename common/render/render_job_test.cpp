@@ -1,6 +1,8 @@
 // The rays a chain reports (ChainFlush::rays: the progress page's and the benchmarks' rays per
-// second) are the rays the scene traced for it, one for one, for every algorithm; and tracing the
-// logged rays again with Embree alone finds as many hits as the render did. farm_bench's
+// second) are the rays the scene traced for it, one for one, for every algorithm (a count dropped
+// from BDPT's connections fails it); and the log replays them as the render traced them: Embree
+// alone finds as many hits as the render's queries did (a check of the log and of the replay's
+// set-up, which Embree's determinism makes exact). farm_bench's
 // share of Embree's rate (bench/render_bench.cpp) stands on both.
 #include "common/render/render_job.h"
 
@@ -40,8 +42,8 @@ TEST(RenderJob, EveryRayAChainCountsIsOneTheSceneTraced) {
     const std::string name = algorithmName(algorithm);
     EXPECT_GT(counted, 1000) << name;
     EXPECT_EQ(int64_t(log.rays.size()), counted) << name;
-    // Replayed, the closest hits and the occlusion tests hit as often as they did in the render
-    // (neither never nor always).
+    // Replayed, the closest hits and the occlusion tests hit as often as they did in the render,
+    // which was neither never nor always.
     int64_t hits = 0;
     for (const RayLog::Entry& e : log.rays) hits += e.hit;
     EXPECT_EQ(scene->traceLoggedRays(log), hits) << name;

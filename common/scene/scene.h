@@ -1,6 +1,8 @@
 #pragma once
-// The renderer's scene: the description turned into Embree geometry, BSDFs, area lights and the
-// camera. Read-only after construction and shared by all threads of a process.
+// The renderer's scene: the description turned into Embree geometry, BSDFs, lights (lights.h) and
+// the camera. Read-only after construction and shared by all threads of a process, except for the
+// ray log a single-threaded benchmark may set (setRayLog).
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <utility>
@@ -31,11 +33,6 @@ struct SurfaceHit {
   uint32_t primitive = 0;
 };
 
-// The first-order geometry of a surface around one of its points, which the manifold walk
-// differentiates specular constraints with (Jakob and Marschner 2012, section 4): an orthonormal
-// basis (dpdu, dpdv) of the tangent plane (perpendicular to the geometric normal), the unit
-// shading normal ns and its derivatives along dpdu and dpdv (zero where the shading normal is
-// the face's own; the derivative of the normalized interpolated vertex normal on a smooth mesh).
 // The rays a scene traced, for the benchmark that sets the estimators' ray rates beside Embree's
 // own on the same rays (Scene::setRayLog, bench/render_bench.cpp).
 struct RayLog {
@@ -48,6 +45,11 @@ struct RayLog {
   std::vector<Entry> rays;
 };
 
+// The first-order geometry of a surface around one of its points, which the manifold walk
+// differentiates specular constraints with (Jakob and Marschner 2012, section 4): an orthonormal
+// basis (dpdu, dpdv) of the tangent plane (perpendicular to the geometric normal), the unit
+// shading normal ns and its derivatives along dpdu and dpdv (zero where the shading normal is
+// the face's own; the derivative of the normalized interpolated vertex normal on a smooth mesh).
 struct SurfaceDifferential {
   Vec3f dpdu, dpdv;
   Vec3f ns, dndu, dndv;
@@ -102,7 +104,8 @@ class Scene {
   // Closest hit along r within (0, r.tMax); false when the ray leaves the scene.
   bool intersect(const Ray& r, SurfaceHit* hit) const;
   // While a log is set, every ray the scene traces (closest hits and occlusion tests, whichever
-  // query asked) is appended to it. For one thread: set it only where one thread renders.
+  // query asked) is appended to it. Not synchronized: set it only while one thread renders and
+  // no other uses the scene (a benchmark's; nullptr, the default, logs nothing).
   void setRayLog(RayLog* log) const { rayLog_ = log; }
   // The logged rays traced by Embree alone, in their order, with nothing worked out of the hits:
   // what the hardware and Embree allow for that mix of rays. Returns how many hit.

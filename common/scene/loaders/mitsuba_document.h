@@ -7,6 +7,7 @@
 // grammar from what it means (pbrt_parser.h is ours for pbrt), for Mitsuba's XML.
 //
 // Every error throws SceneLoadError (scene_files.h) naming the file and the line.
+#include <cstddef>
 #include <filesystem>
 #include <initializer_list>
 #include <map>

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <pugixml.hpp>
 #include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
