@@ -91,16 +91,7 @@ void BM_Share(benchmark::State& state, const char* name, const char* file, Algor
   const bool samples = algorithm == Algorithm::PathTracing || algorithm == Algorithm::Bidirectional;
   const int64_t work = samples ? 16384 : algorithm == Algorithm::ERPT ? 256 : 20000;
   int64_t done = 0, rays = 0;
-  auto run = [&](int64_t budget) {
-    ChainSpec spec = first;
-    spec.budget = budget;
-    spec.flushInterval = budget;
-    job.runChain(spec, [&](ChainFlush&& f) {
-      done += f.mutations;
-      rays += f.rays;
-      return true;
-    });
-  };
+  auto run = [&](int64_t budget) { runChainOnce(job, first, budget, &done, &rays); };
   // Embree's rate on this work's rays, over at least half a second of replays.
   RayLog log;
   scene->setRayLog(&log);
@@ -141,32 +132,31 @@ void BM_Share(benchmark::State& state, const char* name, const char* file, Algor
   state.counters["bytes/work"] = done > 0 ? bytes / double(done) : 0.0;
 }
 
-#define FARM_SHARE(scene, label, file)                                            \
-  BENCHMARK_CAPTURE(BM_Share, label##Pt, scene, file, Algorithm::PathTracing)     \
-      ->MinTime(1.0)                                                              \
-      ->Unit(benchmark::kMillisecond);                                            \
-  BENCHMARK_CAPTURE(BM_Share, label##Bdpt, scene, file, Algorithm::Bidirectional) \
-      ->MinTime(1.0)                                                              \
-      ->Unit(benchmark::kMillisecond);                                            \
-  BENCHMARK_CAPTURE(BM_Share, label##Pssmlt, scene, file, Algorithm::PSSMLT)      \
-      ->MinTime(1.0)                                                              \
-      ->Unit(benchmark::kMillisecond);                                            \
-  BENCHMARK_CAPTURE(BM_Share, label##Mmlt, scene, file, Algorithm::MMLT)          \
-      ->MinTime(1.0)                                                              \
-      ->Unit(benchmark::kMillisecond);                                            \
-  BENCHMARK_CAPTURE(BM_Share, label##Mlt, scene, file, Algorithm::MLT)            \
-      ->MinTime(1.0)                                                              \
-      ->Unit(benchmark::kMillisecond);                                            \
-  BENCHMARK_CAPTURE(BM_Share, label##Erpt, scene, file, Algorithm::ERPT)          \
-      ->MinTime(1.0)                                                              \
-      ->Unit(benchmark::kMillisecond)
-
-FARM_SHARE("cornell-box", Cornell, "scene.xml");
-FARM_SHARE("cornell-box-pbrt", CornellPbrt, "scene.pbrt");
-FARM_SHARE("veach-ajar", VeachAjar, "scene.pbrt");
-FARM_SHARE("veach-bidir", VeachBidir, "scene.xml");
-FARM_SHARE("veach-mis", VeachMis, "scene.xml");
-FARM_SHARE("water-caustic", WaterCaustic, "scene.xml");
+// BM_Share/<scene><algorithm> for every shared scene and algorithm.
+const bool kShareRegistered = [] {
+  struct SharedScene {
+    const char *name, *label, *file;
+  };
+  struct Kind {
+    Algorithm algorithm;
+    const char* label;
+  };
+  for (const SharedScene& scene : {SharedScene{"cornell-box", "Cornell", "scene.xml"},
+                                   SharedScene{"cornell-box-pbrt", "CornellPbrt", "scene.pbrt"},
+                                   SharedScene{"veach-ajar", "VeachAjar", "scene.pbrt"},
+                                   SharedScene{"veach-bidir", "VeachBidir", "scene.xml"},
+                                   SharedScene{"veach-mis", "VeachMis", "scene.xml"},
+                                   SharedScene{"water-caustic", "WaterCaustic", "scene.xml"}})
+    for (const Kind& kind :
+         {Kind{Algorithm::PathTracing, "Pt"}, Kind{Algorithm::Bidirectional, "Bdpt"},
+          Kind{Algorithm::PSSMLT, "Pssmlt"}, Kind{Algorithm::MMLT, "Mmlt"},
+          Kind{Algorithm::MLT, "Mlt"}, Kind{Algorithm::ERPT, "Erpt"}})
+      benchmark::RegisterBenchmark((std::string("BM_Share/") + scene.label + kind.label).c_str(),
+                                   BM_Share, scene.name, scene.file, kind.algorithm)
+          ->MinTime(1.0)
+          ->Unit(benchmark::kMillisecond);
+  return true;
+}();
 
 BENCHMARK_CAPTURE(BM_PathTracing, Cornell, "cornell-box")->MinTime(2.0);
 BENCHMARK_CAPTURE(BM_Bidirectional, Cornell, "cornell-box")->MinTime(2.0);

@@ -62,7 +62,7 @@ int Lights::pick(float u, float* pdf) const {
   const double target = double(u) * total;
   int i = int(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin());
   i = std::min(i, int(lights_.size()) - 1);
-  *pdf = float(double(lights_[size_t(i)].power) / total);
+  *pdf = pickPdf(i);
   return i;
 }
 

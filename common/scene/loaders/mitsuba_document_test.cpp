@@ -24,14 +24,12 @@ std::string scene(const std::string& body) {
 SceneLoadError errorOf(const std::string& text,
                        const std::function<void(MitsubaDocument&)>& run = nullptr) {
   TempDir dir("mitsuba_document_test");
-  try {
-    MitsubaDocument document(dir.write("scene.xml", text));
-    if (run) run(document);
-  } catch (const SceneLoadError& e) {
-    return e;
-  }
-  ADD_FAILURE() << "no error for: " << text;
-  return SceneLoadError("", 0, "");
+  return thrownLoadError(
+      [&] {
+        MitsubaDocument document(dir.write("scene.xml", text));
+        if (run) run(document);
+      },
+      "no error for: " + text);
 }
 
 // The first element child of the root.
@@ -140,13 +138,10 @@ TEST(MitsubaProperties, ReadsByNameAndTypeAndRefusesWhatNobodyRead) {
   EXPECT_DOUBLE_EQ(props.getIor("extIOR", 1.0), 1.0);  // absent: the default
   EXPECT_TRUE(props.getBoolean("flag", false));
   EXPECT_EQ(props.getSpectrum("color", Spectrum(0.0f)).z, 0.5f);
-  try {
-    props.rejectUnused("bsdf 'dielectric'");
-    ADD_FAILURE() << "'extra' was never read";
-  } catch (const SceneLoadError& e) {
-    EXPECT_EQ(e.line(), 7);
-    EXPECT_EQ(e.problem(), "unsupported parameter 'extra' for bsdf 'dielectric'");
-  }
+  const SceneLoadError unread =
+      thrownLoadError([&] { props.rejectUnused("bsdf 'dielectric'"); }, "'extra' was never read");
+  EXPECT_EQ(unread.line(), 7);
+  EXPECT_EQ(unread.problem(), "unsupported parameter 'extra' for bsdf 'dielectric'");
   // Nested objects where none may be; a parameter twice; of the wrong type.
   SceneLoadError nestedError =
       errorOf(scene("<emitter>\n<bsdf/>\n</emitter>\n"),

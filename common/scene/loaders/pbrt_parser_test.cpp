@@ -32,13 +32,7 @@ Recorder parse(const TempDir& dir, const std::string& text) {
 // The error parsing `text` throws: its line and problem.
 SceneLoadError parseError(const std::string& text) {
   TempDir dir("pbrt_parser_test");
-  try {
-    parse(dir, text);
-  } catch (const SceneLoadError& e) {
-    return e;
-  }
-  ADD_FAILURE() << "no error for: " << text;
-  return SceneLoadError("", 0, "");
+  return thrownLoadError([&] { parse(dir, text); }, "no error for: " + text);
 }
 
 TEST(PbrtParser, HandsOverDirectivesWithTheirWordsNumbersAndParameters) {
@@ -82,12 +76,9 @@ TEST(PbrtParser, AnIncludeCycleIsAnError) {
   TempDir dir("pbrt_parser_test");
   dir.write("a.pbrt", "Include \"b.pbrt\"\n");
   dir.write("b.pbrt", "Include \"a.pbrt\"\n");
-  try {
-    parse(dir, "Include \"a.pbrt\"\n");
-    ADD_FAILURE() << "a cycle parsed";
-  } catch (const SceneLoadError& e) {
-    EXPECT_NE(e.problem().find("include cycle"), std::string::npos) << e.what();
-  }
+  const SceneLoadError e =
+      thrownLoadError([&] { parse(dir, "Include \"a.pbrt\"\n"); }, "a cycle parsed");
+  EXPECT_NE(e.problem().find("include cycle"), std::string::npos) << e.what();
 }
 
 TEST(PbrtParser, MalformedParameterListsNameTheirLine) {
@@ -112,26 +103,17 @@ TEST(PbrtParser, TypedAccessAndUnreadParametersAreErrorsOnTheirLine) {
                      "  \"float sigma\" 0.5\n"
                      "  \"integer count\" 2.5\n");
   PbrtDirective& d = r.directives.at(0);
-  try {
-    d.getInt("type", 0);
-    ADD_FAILURE() << "a string read as an integer";
-  } catch (const SceneLoadError& e) {
-    EXPECT_EQ(e.line(), 2);
-    EXPECT_NE(e.problem().find("must be of type integer, not string"), std::string::npos);
-  }
-  try {
-    d.getInt("count", 0);
-    ADD_FAILURE() << "2.5 read as an integer";
-  } catch (const SceneLoadError& e) {
-    EXPECT_EQ(e.line(), 4);
-  }
-  try {
-    d.rejectUnused("material 'diffuse'");
-    ADD_FAILURE() << "'sigma' was never read";
-  } catch (const SceneLoadError& e) {
-    EXPECT_EQ(e.line(), 3);
-    EXPECT_EQ(e.problem(), "material 'diffuse': parameter 'float sigma' is not supported");
-  }
+  const SceneLoadError type =
+      thrownLoadError([&] { d.getInt("type", 0); }, "a string read as an integer");
+  EXPECT_EQ(type.line(), 2);
+  EXPECT_NE(type.problem().find("must be of type integer, not string"), std::string::npos);
+  const SceneLoadError fraction =
+      thrownLoadError([&] { d.getInt("count", 0); }, "2.5 read as an integer");
+  EXPECT_EQ(fraction.line(), 4);
+  const SceneLoadError unread =
+      thrownLoadError([&] { d.rejectUnused("material 'diffuse'"); }, "'sigma' was never read");
+  EXPECT_EQ(unread.line(), 3);
+  EXPECT_EQ(unread.problem(), "material 'diffuse': parameter 'float sigma' is not supported");
 }
 
 }  // namespace

@@ -1,11 +1,12 @@
 #pragma once
 // A fresh directory for the loaders' tests to write small scene files into; removed with it.
-// And the check every loader error test makes.
+// And the checks every loader error test makes.
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -39,6 +40,19 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// The SceneLoadError `run` throws; when it throws none, a test failure saying `unexpected` and an
+// error of no line and no problem.
+inline SceneLoadError thrownLoadError(const std::function<void()>& run,
+                                      const std::string& unexpected) {
+  try {
+    run();
+  } catch (const SceneLoadError& e) {
+    return e;
+  }
+  ADD_FAILURE() << unexpected;
+  return SceneLoadError("", 0, "");
+}
 
 // The SceneLoadError's message for the scene file at `path` (either format, by its extension),
 // or "" when it loads.
