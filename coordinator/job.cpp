@@ -46,6 +46,33 @@ std::optional<Image> readReference(const std::string& path, const RenderJob& ren
   return image;
 }
 
+// The error groups' images and the job's image, resolved from the aggregator's films a band of
+// rows at a time as the estimate reads them; each group's with its own work (Z pooled from all
+// the chains, as the image's: batch_means.h counts Z's error once, not as spread).
+class AggregatedFilms : public ErrorFilms {
+ public:
+  AggregatedFilms(const RenderJob& job, const BootstrapResult& bootstrap,
+                  const SplatAggregator& sums)
+      : job_(job), bootstrap_(bootstrap), sums_(sums) {}
+  int width() const override { return job_.width(); }
+  int height() const override { return job_.height(); }
+  size_t groups() const override { return sums_.groups(); }
+  void rows(size_t g, int y0, int y1, float* out) const override {
+    if (g == sums_.groups()) {
+      job_.resolveRows(sums_.sums(), scale(sums_.workDone()), y0, y1, out);
+    } else {
+      job_.resolveRows(sums_.groupSums(uint32_t(g)), scale(sums_.groupWork(uint32_t(g))), y0, y1,
+                       out);
+    }
+  }
+
+ private:
+  double scale(int64_t work) const { return job_.imageScale(bootstrap_, work, sums_.largeSteps()); }
+  const RenderJob& job_;
+  const BootstrapResult& bootstrap_;
+  const SplatAggregator& sums_;
+};
+
 }  // namespace
 
 Job::Job(std::string id, JobSpec spec, SteadyClock::duration leaseDuration, std::string outputDir,
@@ -271,7 +298,7 @@ void Job::restore(StoredJob stored) {
   }
   if (!stored.tail.empty() && store_) {
     // Fold the replayed log now, so that restarts in a row never replay more than one interval.
-    Status st = store_->checkpoint(id_, aggregator_->snapshot(), scheduler_->snapshot());
+    Status st = store_->checkpoint(id_, *aggregator_, scheduler_->snapshot());
     if (!st.isOk()) log("cannot checkpoint: " + st.message());
   }
   const double rendered = std::max(0.0, stored.elapsedSeconds - loadSeconds_ - bootstrap_.seconds);
@@ -353,7 +380,7 @@ void Job::checkpointLocked() {
   if (!store_) return;
   const uint64_t filmBytes = uint64_t(width_) * uint64_t(height_) * 3 * sizeof(double);
   if (tailBytes_ < store_->checkpointThreshold(filmBytes)) return;
-  Status st = store_->checkpoint(id_, aggregator_->snapshot(), scheduler_->snapshot());
+  Status st = store_->checkpoint(id_, *aggregator_, scheduler_->snapshot());
   if (st.isOk()) {
     tailBytes_ = 0;
   } else {
@@ -438,30 +465,28 @@ void Job::recordErrorLocked(SteadyClock::time_point now, bool force) {
   ErrorSample sample;
   sample.elapsedSeconds = secondsSince(submitted_, now);
   sample.samples = work;
-  Image image = renderJob_->resolve(
-      aggregator_->sums(), renderJob_->imageScale(bootstrap_, work, aggregator_->largeSteps()));
   if (reference_) {
+    Image image = renderJob_->resolve(
+        aggregator_->sums(), renderJob_->imageScale(bootstrap_, work, aggregator_->largeSteps()));
     ErrorMetrics metrics;
     if (compareImages(image, *reference_, &metrics, nullptr)) {
       sample.rmse = metrics.rmse;
       sample.relMse = metrics.relMse;
     }
   }
-  // Batch means over the error groups, once every group has work to show.
-  std::vector<Image> images;
+  // Batch means over the error groups, once every group has work to show, resolved from the
+  // films a band of rows at a time (batch_means.h).
   std::vector<double> groupWork;
-  for (uint32_t g = 0; g < groups; ++g) {
+  for (uint32_t g = 0; g < groups && groups >= 2; ++g) {
     const int64_t w = aggregator_->groupWork(g);
     if (w <= 0) break;
-    images.push_back(
-        renderJob_->resolve(aggregator_->groupSums(g),
-                            renderJob_->imageScale(bootstrap_, w, aggregator_->largeSteps())));
     groupWork.push_back(double(w));
   }
-  if (images.size() == groups && groups >= 2) {
+  if (groupWork.size() == groups && groups >= 2) {
     const double zRel = bootstrap_.normalizationRelativeVariance(aggregator_->largeSteps());
     ErrorEstimate estimate;
-    if (estimateError(images, groupWork, image, zRel, &estimate, nullptr))
+    if (estimateError(AggregatedFilms(*renderJob_, bootstrap_, *aggregator_), groupWork, zRel,
+                      &estimate, nullptr))
       sample.estimatedRelMse = estimate.relMse;
   }
   if (sample.relMse >= 0 || sample.estimatedRelMse >= 0) {

@@ -7,20 +7,10 @@
 
 #include "coordinator/store_schema.h"
 #include "proto/splat_codec.h"
-#include "proto/zstd_frame.h"
 
 namespace farm {
 namespace fs = std::filesystem;
 using store::Statement;
-
-namespace {
-
-template <class T>
-std::string compressVector(const std::vector<T>& values) {
-  return zstdCompress(values.data(), values.size() * sizeof(T));
-}
-
-}  // namespace
 
 JobStore::JobStore(sqlite3* db, std::string path, std::string logDir)
     : db_(db), path_(std::move(path)), log_(std::move(logDir)) {}
@@ -247,15 +237,17 @@ Status JobStore::appendRecord(const std::string& id, const std::string& record,
   return st;
 }
 
-Status JobStore::checkpoint(const std::string& id, const SplatAggregator::Snapshot& sums,
+Status JobStore::checkpoint(const std::string& id, const SplatAggregator& sums,
                             const std::vector<ChainScheduler::ChainSnapshot>& chains) {
-  const std::string frame = compressVector(sums.sums);  // outside the lock
+  // Compressed from the aggregator's films as they are (outside the store's lock): a copy of
+  // them would double the coordinator's memory for the moment (570 MiB at 4K, four groups).
+  const std::string frame = store::encodeFilms(sums);
   std::lock_guard<std::mutex> lock(mutex_);
   // The film is on disk under its own name before the record that names it commits, and the
   // previous film is removed only after (flush_log.h).
   std::string name;
   if (Status st = log_.writeFilm(id, generation_, frame, &name); !st.isOk()) return st;
-  const std::string record = store::encodeCheckpoint(sums, chains, name);
+  const std::string record = store::encodeCheckpoint(sums.snapshot(false), chains, name);
   Status st = transaction("cannot checkpoint job " + id, [&] {
     return Statement(db_, "INSERT OR REPLACE INTO checkpoints(job, record) VALUES(?, ?)")
                .bind(1, id)
@@ -317,15 +309,14 @@ Status JobStore::loadJobs(std::vector<StoredJob>* jobs) {
     }
     if (job.phase == JobPhase::kRendering && !job.plan) return corrupt("rendering without a plan");
     if (!q.isNull(6)) {
-      const size_t values =
-          job.phase == JobPhase::kRendering
-              ? size_t(SplatAggregator::groupCount(errorGroupsOf(job.plan->chains))) *
-                    size_t(job.plan->width) * size_t(job.plan->height) * 3
-              : 0;
+      const bool films = job.phase == JobPhase::kRendering;
+      const size_t values = films ? size_t(job.plan->width) * size_t(job.plan->height) * 3 : 0;
+      const uint32_t groups =
+          films ? SplatAggregator::groupCount(errorGroupsOf(job.plan->chains)) : 0;
       SplatAggregator::Snapshot snapshot;
       std::string sumsFile;
-      if (!store::decodeCheckpoint(q.bytes(6), values, log_.dir(), &snapshot, &job.checkpointChains,
-                                   &sumsFile, &problem)) {
+      if (!store::decodeCheckpoint(q.bytes(6), values, groups, log_.dir(), &snapshot,
+                                   &job.checkpointChains, &sumsFile, &problem)) {
         return corrupt(problem);
       }
       if (!sumsFile.empty()) log_.knowFilm(job.id, sumsFile);

@@ -16,9 +16,12 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
     : width_(width),
       height_(height),
       chainGroup_(std::move(chainGroups)),
-      groupSums_(groupCount(chainGroup_), std::vector<double>(filmValues(), 0.0)),
-      groupWork_(groupSums_.size(), 0),
-      nextFlush_(chainGroup_.size(), 0) {}
+      sums_(filmValues(), 0.0),
+      groupWork_(groupCount(chainGroup_), 0),
+      nextFlush_(chainGroup_.size(), 0) {
+  if (groupWork_.size() >= 2)
+    groupSums_.assign(groupWork_.size(), std::vector<float>(filmValues()));
+}
 
 SplatAggregator::SplatAggregator(int width, int height, uint32_t numChains)
     : SplatAggregator(width, height, std::vector<uint32_t>(numChains, 0)) {}
@@ -36,11 +39,22 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
       tallies_(std::move(snapshot.tallies)),
       largeSteps_(snapshot.largeSteps) {
   const size_t groups = groupCount(chainGroup_), values = filmValues();
-  if (snapshot.sums.size() != groups * values) {
+  const std::string film = std::to_string(width) + "x" + std::to_string(height) + "x3";
+  if (snapshot.sums.size() != values) {
     throw std::invalid_argument("the snapshot's film holds " +
-                                std::to_string(snapshot.sums.size()) + " values, not " +
-                                std::to_string(groups) + " group(s) of " + std::to_string(width) +
-                                "x" + std::to_string(height) + "x3");
+                                std::to_string(snapshot.sums.size()) + " values, not " + film);
+  }
+  const size_t groupFilms = groups >= 2 ? groups : 0;
+  if (values == 0 && snapshot.groupSums.empty())  // an ended job's counts: no films
+    snapshot.groupSums.resize(groupFilms);
+  if (snapshot.groupSums.size() != groupFilms) {
+    throw std::invalid_argument("the snapshot holds " + std::to_string(snapshot.groupSums.size()) +
+                                " group film(s), not " + std::to_string(groupFilms));
+  }
+  for (const std::vector<float>& g : snapshot.groupSums) {
+    if (g.size() != values)
+      throw std::invalid_argument("a group's film in the snapshot holds " +
+                                  std::to_string(g.size()) + " values, not " + film);
   }
   if (nextFlush_.empty()) nextFlush_.assign(chainGroup_.size(), 0);  // an ended job's counts
   if (nextFlush_.size() != chainGroup_.size()) {
@@ -54,26 +68,15 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
                                 std::to_string(groups));
   }
   groupWork_ = std::move(snapshot.groupWork);
-  for (size_t g = 0; g < groups; ++g) {
-    groupSums_.emplace_back(snapshot.sums.begin() + std::ptrdiff_t(g * values),
-                            snapshot.sums.begin() + std::ptrdiff_t((g + 1) * values));
-  }
-}
-
-std::vector<double> SplatAggregator::sums() const {
-  std::vector<double> total = groupSums_.front();
-  for (size_t g = 1; g < groupSums_.size(); ++g) {
-    for (size_t i = 0; i < total.size(); ++i) total[i] += groupSums_[g][i];
-  }
-  return total;
+  sums_ = std::move(snapshot.sums);
+  groupSums_ = std::move(snapshot.groupSums);
 }
 
 SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
   Snapshot s;
   if (withSums) {
-    s.sums.reserve(groupSums_.size() * filmValues());
-    for (const std::vector<double>& film : groupSums_)
-      s.sums.insert(s.sums.end(), film.begin(), film.end());
+    s.sums = sums_;
+    s.groupSums = groupSums_;
   }
   s.groupWork = groupWork_;
   s.nextFlush = nextFlush_;
@@ -122,8 +125,12 @@ FlushOutcome SplatAggregator::addBatch(const FlushBatch& batch, std::string* pro
   const uint32_t group = chainGroup_[batch.entries.front().chainIndex];
   const FlushOutcome film = checkFilm(batch.film, "the batch's film", problem);
   if (film != FlushOutcome::kAccepted) return film;
-  std::vector<double>& sums = groupSums_[group];
-  for (size_t i = 0; i < sums.size(); ++i) sums[i] += double(batch.film.splats[i]);
+  const std::vector<float>& splats = batch.film.splats;
+  for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += double(splats[i]);
+  if (!groupSums_.empty()) {
+    std::vector<float>& groupSums = groupSums_[group];
+    for (size_t i = 0; i < groupSums.size(); ++i) groupSums[i] += splats[i];
+  }
   for (const ChainFlush& entry : batch.entries) countFlush(entry);
   return FlushOutcome::kAccepted;
 }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace farm {
 namespace {
@@ -165,6 +166,34 @@ TEST(SplatAggregator, SumsInDoublePrecision) {
     ASSERT_EQ(sum.add(makeFlush(1, i, 1.0f, 1, 1)), FlushOutcome::kAccepted);
   }
   EXPECT_EQ(sum.sums()[0], 16777216.0 + 1000.0);
+}
+
+// The image is the sum of every accepted flush in double; with two or more error groups each
+// group's film is its own flushes' sum in float (the batch-means estimate's input), and with one
+// group there is no second film.
+TEST(SplatAggregator, KeepsEachGroupsFilmBesideTheImage) {
+  SplatAggregator sum(1, 1, std::vector<uint32_t>{0, 1, 1});
+  EXPECT_EQ(sum.groups(), 2u);
+  EXPECT_EQ(sum.add(makeFlush(0, 0, 3.0f, 1, 1)), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.add(makeFlush(1, 0, 5.0f, 1, 1)), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.add(makeFlush(2, 0, 0.25f, 1, 1)), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.sums(), std::vector<double>(3, 8.25));
+  EXPECT_EQ(sum.groupSums(0), std::vector<float>(3, 3.0f));
+  EXPECT_EQ(sum.groupSums(1), std::vector<float>(3, 5.25f));
+  EXPECT_EQ(sum.groupWork(0), 100);
+  EXPECT_EQ(sum.groupWork(1), 200);
+  const SplatAggregator restored(1, 1, {0, 1, 1}, sum.snapshot());
+  EXPECT_EQ(restored.sums(), sum.sums());
+  EXPECT_EQ(restored.groupSums(1), sum.groupSums(1));
+
+  SplatAggregator one(1, 1, 2);
+  EXPECT_EQ(one.groups(), 1u);
+  EXPECT_THROW(one.groupSums(0), std::out_of_range);
+  EXPECT_TRUE(one.snapshot().groupSums.empty());
+  // A snapshot whose group films do not match the job's groups is refused, not half-restored.
+  SplatAggregator::Snapshot wrong = sum.snapshot();
+  wrong.groupSums.pop_back();
+  EXPECT_THROW(SplatAggregator(1, 1, {0, 1, 1}, wrong), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "coordinator/store_records.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -214,6 +215,7 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
                              const std::string& sumsFile) {
   v1::CheckpointRecord r;
   r.set_sums_file(sumsFile);
+  r.set_sums_layout(1);
   r.set_work_done(s.workDone);
   r.set_rejected_nan(s.rejected.nan);
   r.set_rejected_infinite(s.rejected.infinite);
@@ -233,8 +235,18 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
   return r.SerializeAsString();
 }
 
-bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string& logDir,
-                      SplatAggregator::Snapshot* s,
+std::string encodeFilms(const SplatAggregator& sums) {
+  const std::vector<double>& image = sums.sums();
+  std::string frames = zstdCompress(image.data(), image.size() * sizeof(double));
+  for (uint32_t g = 0; g < sums.groups() && sums.groups() >= 2; ++g) {
+    const std::vector<float>& film = sums.groupSums(g);
+    frames += zstdCompress(film.data(), film.size() * sizeof(float));
+  }
+  return frames;
+}
+
+bool decodeCheckpoint(const std::string& bytes, size_t values, uint32_t groups,
+                      const std::string& logDir, SplatAggregator::Snapshot* s,
                       std::vector<ChainScheduler::ChainSnapshot>* chains, std::string* sumsFile,
                       std::string* error) {
   v1::CheckpointRecord r;
@@ -247,19 +259,41 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string
     *error = "a checkpoint names the file '" + *sumsFile + "'";
     return false;
   }
-  s->sums.assign(values, 0.0);
   if (values > 0) {
-    std::string frame = r.sums_zstd();
+    std::string frames = r.sums_zstd();
     if (!sumsFile->empty()) {
       const std::string path = (fs::path(logDir) / *sumsFile).string();
       std::ifstream in(path, std::ios::binary);
-      frame.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+      frames.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
       if (!in.good() && !in.eof()) {
         *error = "cannot read the checkpoint's film " + path;
         return false;
       }
     }
-    if (!zstdDecompressExact(frame, s->sums.data(), values * sizeof(double))) {
+    const size_t groupFilms = groups >= 2 ? groups : 0;
+    s->sums.assign(values, 0.0);
+    s->groupSums.assign(groupFilms, std::vector<float>(values));
+    bool read = false;
+    if (r.sums_layout() == 0) {
+      std::vector<double> films(size_t(std::max<uint32_t>(groups, 1)) * values);
+      read = zstdDecompressExact(frames, films.data(), films.size() * sizeof(double));
+      for (size_t g = 0; read && g * values < films.size(); ++g) {
+        for (size_t i = 0; i < values; ++i) {
+          s->sums[i] += films[g * values + i];
+          if (groupFilms > 0) s->groupSums[g][i] = float(films[g * values + i]);
+        }
+      }
+    } else if (r.sums_layout() == 1) {
+      std::vector<std::pair<void*, size_t>> outs = {{s->sums.data(), values * sizeof(double)}};
+      for (std::vector<float>& g : s->groupSums)
+        outs.emplace_back(g.data(), values * sizeof(float));
+      read = zstdDecompressFrames(frames, outs);
+    } else {
+      *error = "a checkpoint of film layout " + std::to_string(r.sums_layout()) +
+               " (this coordinator reads 0 and 1)";
+      return false;
+    }
+    if (!read) {
       *error = "the checkpoint's film " +
                (sumsFile->empty() ? std::string("in the database") : *sumsFile) +
                " is missing, corrupt or of another film size";

@@ -52,14 +52,20 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error);
 std::string encodeBatch(const FlushBatch& batch, const EncodedSplats* wire);
 bool decodeRecord(const std::string& bytes, FlushBatch* batch, std::string* error);
 
-// The counts and resume points; the film goes to `sumsFile` (beside the database) when named.
+// The counts and resume points; the films go to `sumsFile` (beside the database) when named,
+// as encodeFilms() writes them.
 std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
                              const std::vector<ChainScheduler::ChainSnapshot>& chains,
                              const std::string& sumsFile = "");
-// `values` is the films' size (groups*width*height*3), or 0 for the counts a finished job keeps;
-// the films are read from `logDir`/sums_file. *sumsFile: the file the record names ("" for none).
-bool decodeCheckpoint(const std::string& bytes, size_t values, const std::string& logDir,
-                      SplatAggregator::Snapshot* s,
+// The aggregator's films, compressed as CheckpointRecord's layout 1: the image's, then each
+// group's (with two or more groups).
+std::string encodeFilms(const SplatAggregator& sums);
+// `values` is a film's size (width*height*3) and `groups` the job's error groups, or 0 values
+// for the counts a finished job keeps; the films are read from `logDir`/sums_file, in either
+// layout (a layout-0 record's groups are summed into the image and kept as float).
+// *sumsFile: the file the record names ("" for none).
+bool decodeCheckpoint(const std::string& bytes, size_t values, uint32_t groups,
+                      const std::string& logDir, SplatAggregator::Snapshot* s,
                       std::vector<ChainScheduler::ChainSnapshot>* chains, std::string* sumsFile,
                       std::string* error);
 

@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "proto/convert.h"
 #include "proto/coordinator_store.pb.h"
+#include "proto/zstd_frame.h"
 
 namespace farm {
 namespace {
@@ -137,6 +140,93 @@ TEST(StoreRecords, ARecordThatDoesNotDecodeSaysSo) {
   error.clear();
   EXPECT_FALSE(store::decodeRecord(r.SerializeAsString(), &back, &error));
   EXPECT_NE(error.find("flush 1 of chain 5"), std::string::npos) << error;
+}
+
+// Two groups of a 1x2 film (6 values), fed so that each film holds values a float cannot hold
+// exactly once summed: the image in double, each group in float.
+SplatAggregator twoGroupSums() {
+  SplatAggregator sums(1, 2, std::vector<uint32_t>{0, 1});
+  for (uint32_t chain = 0; chain < 2; ++chain) {
+    ChainFlush f;
+    f.chainIndex = chain;
+    f.mutations = 10 + chain;
+    f.width = 1;
+    f.height = 2;
+    f.splats = {16777216.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f};
+    EXPECT_EQ(sums.add(f), FlushOutcome::kAccepted);
+    f.flushIndex = 1;
+    f.splats = {1.0f, 0.5f, 0.25f, float(chain), 0.0f, 7.0f};
+    EXPECT_EQ(sums.add(f), FlushOutcome::kAccepted);
+  }
+  return sums;
+}
+
+// A checkpoint's films come back as the aggregator held them: the image's in double, each
+// group's in float (layout 1), and the aggregator they restore goes on from there.
+TEST(StoreRecords, ACheckpointsFilmsComeBackAsTheyWereHeld) {
+  const SplatAggregator sums = twoGroupSums();
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/films.sums", std::ios::binary) << store::encodeFilms(sums);
+  const std::string record = store::encodeCheckpoint(sums.snapshot(false), {}, "films.sums");
+  SplatAggregator::Snapshot back;
+  std::vector<ChainScheduler::ChainSnapshot> chains;
+  std::string file, error;
+  ASSERT_TRUE(store::decodeCheckpoint(record, 6, 2, dir, &back, &chains, &file, &error)) << error;
+  EXPECT_EQ(file, "films.sums");
+  EXPECT_EQ(back.sums, sums.sums());
+  EXPECT_EQ(back.sums[0], 2 * (16777216.0 + 1.0)) << "the image keeps what a float would lose";
+  ASSERT_EQ(back.groupSums.size(), 2u);
+  for (uint32_t g = 0; g < 2; ++g) EXPECT_EQ(back.groupSums[g], sums.groupSums(g));
+  EXPECT_EQ(back.groupWork, (std::vector<int64_t>{20, 22}));
+  back.nextFlush = {2, 2};
+  const SplatAggregator restored(1, 2, {0, 1}, std::move(back));
+  EXPECT_EQ(restored.sums(), sums.sums());
+  EXPECT_EQ(restored.groupSums(1), sums.groupSums(1));
+  EXPECT_EQ(restored.workDone(), 42);
+
+  // Films that do not fit the job (a group's frame missing, or a film of another size) say so.
+  for (const auto& [values, groups] : {std::pair<size_t, uint32_t>{6, 3}, {9, 2}}) {
+    SplatAggregator::Snapshot wrong;
+    chains.clear();
+    EXPECT_FALSE(
+        store::decodeCheckpoint(record, values, groups, dir, &wrong, &chains, &file, &error));
+    EXPECT_NE(error.find("missing, corrupt or of another film size"), std::string::npos) << error;
+  }
+}
+
+// A checkpoint written before layout 1 (every group's film in double, one frame) still resumes:
+// the groups are summed into the image and kept as float.
+TEST(StoreRecords, CheckpointsOfTheOlderLayoutReadAsTheirSum) {
+  const std::vector<double> films = {1e8 + 1, 2, 3, 4, 5, 6, 1, 0.5, 0.25, 0, 0, 7};
+  store::v1::CheckpointRecord r;
+  r.set_sums_zstd(zstdCompress(films.data(), films.size() * sizeof(double)));
+  r.add_group_work(5);
+  r.add_group_work(6);
+  SplatAggregator::Snapshot back;
+  std::vector<ChainScheduler::ChainSnapshot> chains;
+  std::string file, error;
+  ASSERT_TRUE(
+      store::decodeCheckpoint(r.SerializeAsString(), 6, 2, "", &back, &chains, &file, &error))
+      << error;
+  EXPECT_EQ(back.sums, (std::vector<double>{1e8 + 2, 2.5, 3.25, 4, 5, 13}));
+  ASSERT_EQ(back.groupSums.size(), 2u);
+  EXPECT_EQ(back.groupSums[0], (std::vector<float>{1e8f, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(back.groupSums[1], (std::vector<float>{1, 0.5f, 0.25f, 0, 0, 7}));
+
+  // One group: the image alone, no group film.
+  r.set_sums_zstd(zstdCompress(films.data(), 6 * sizeof(double)));
+  r.clear_group_work();
+  back = SplatAggregator::Snapshot();
+  ASSERT_TRUE(
+      store::decodeCheckpoint(r.SerializeAsString(), 6, 1, "", &back, &chains, &file, &error))
+      << error;
+  EXPECT_EQ(back.sums, std::vector<double>(films.begin(), films.begin() + 6));
+  EXPECT_TRUE(back.groupSums.empty());
+
+  r.set_sums_layout(7);
+  EXPECT_FALSE(
+      store::decodeCheckpoint(r.SerializeAsString(), 6, 1, "", &back, &chains, &file, &error));
+  EXPECT_NE(error.find("layout 7"), std::string::npos) << error;
 }
 
 }  // namespace

@@ -2,25 +2,50 @@
 
 #include <zstd.h>
 
+#include <memory>
 #include <stdexcept>
 
 namespace farm {
 
 std::string zstdCompress(const void* data, size_t size, int level) {
-  std::string out(ZSTD_compressBound(size), '\0');
-  const size_t n = ZSTD_compress(out.data(), out.size(), data, size, level);
+  // Into a buffer of the bound left unwritten (its pages untouched but for the frame), then a
+  // string of the frame's size: a string of the bound would keep the whole bound resident (a
+  // dense 3840x2160 film's is 95 MiB, its frame a sixth of that).
+  const size_t bound = ZSTD_compressBound(size);
+  std::unique_ptr<char[]> buffer(new char[bound]);
+  const size_t n = ZSTD_compress(buffer.get(), bound, data, size, level);
   if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
-  out.resize(n);
-  return out;
+  return std::string(buffer.get(), n);
 }
 
-bool zstdDecompressExact(const std::string& frame, void* out, size_t size) {
+namespace {
+
+bool decompressExact(const char* frame, size_t frameSize, void* out, size_t size) {
   // The announced size first: a frame cannot make us write past `size`, and a frame without
   // the content size (ZSTD_CONTENTSIZE_UNKNOWN) is not one we wrote.
-  const unsigned long long content = ZSTD_getFrameContentSize(frame.data(), frame.size());
+  const unsigned long long content = ZSTD_getFrameContentSize(frame, frameSize);
   if (content != size) return false;
-  const size_t n = ZSTD_decompress(out, size, frame.data(), frame.size());
+  const size_t n = ZSTD_decompress(out, size, frame, frameSize);
   return !ZSTD_isError(n) && n == size;
+}
+
+}  // namespace
+
+bool zstdDecompressExact(const std::string& frame, void* out, size_t size) {
+  return decompressExact(frame.data(), frame.size(), out, size);
+}
+
+bool zstdDecompressFrames(const std::string& frames,
+                          const std::vector<std::pair<void*, size_t>>& outs) {
+  size_t at = 0;
+  for (const auto& [out, size] : outs) {
+    if (at >= frames.size()) return false;
+    const size_t length = ZSTD_findFrameCompressedSize(frames.data() + at, frames.size() - at);
+    if (ZSTD_isError(length) || !decompressExact(frames.data() + at, length, out, size))
+      return false;
+    at += length;
+  }
+  return at == frames.size();
 }
 
 }  // namespace farm

@@ -4,6 +4,8 @@
 // that a frame's size is checked the same way at both.
 #include <cstddef>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace farm {
 
@@ -14,5 +16,10 @@ std::string zstdCompress(const void* data, size_t size, int level = 1);
 // Decompresses `frame` into exactly `size` bytes at `out`; false when the frame announces or
 // holds any other size, or is corrupt.
 bool zstdDecompressExact(const std::string& frame, void* out, size_t size);
+
+// Frames written one after another (zstdCompress's, concatenated), each decompressed into
+// exactly its (out, size); false when there are more or fewer frames or any is as above.
+bool zstdDecompressFrames(const std::string& frames,
+                          const std::vector<std::pair<void*, size_t>>& outs);
 
 }  // namespace farm

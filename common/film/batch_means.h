@@ -25,6 +25,7 @@
 // What the spread cannot see: bias (an algorithm that misses light misses it in every group)
 // and light no group has found yet: on water-caustic, where every local sampler misses a third
 // of the light, it sees the noise and not the deficit.
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -37,11 +38,47 @@ struct ErrorEstimate {
   double rmse = 0;
 };
 
-// groups: the groups' images (G >= 2, each of image's size); work: their work (> 0 each);
-// image: their work-weighted mean; zRelativeVariance: Var(Z) / Z^2 of a shared normalization
-// (0: none). False with *error for fewer than two groups, sizes that differ or no work.
+// The images an estimate reads, a band of rows at a time: the estimate holds a band of each
+// (and the window's rows above and below it), never the whole of them, so that a coordinator
+// resolves them from its films as it goes (at 3840x2160 with four groups, whole images and
+// their per-value products took 1.2 GB).
+class ErrorFilms {
+ public:
+  virtual ~ErrorFilms() = default;
+  virtual int width() const = 0;
+  virtual int height() const = 0;
+  virtual size_t groups() const = 0;
+  // Rows [y0, y1) of group g's image (g < groups()) or, for g == groups(), of the image (their
+  // work-weighted mean): 3 floats a pixel, row-major, from the top row, into out.
+  virtual void rows(size_t g, int y0, int y1, float* out) const = 0;
+};
+
+// Whole images as ErrorFilms: rows copied out of them (the images outlive it).
+class ImageFilms : public ErrorFilms {
+ public:
+  ImageFilms(const std::vector<Image>& groups, const Image& image)
+      : groups_(groups), image_(image) {}
+  int width() const override { return image_.width; }
+  int height() const override { return image_.height; }
+  size_t groups() const override { return groups_.size(); }
+  void rows(size_t g, int y0, int y1, float* out) const override;
+
+ private:
+  const std::vector<Image>& groups_;
+  const Image& image_;
+};
+
+// work: the groups' work (> 0 each); zRelativeVariance: Var(Z) / Z^2 of a shared normalization
+// (0: none). False with *error for fewer than two groups, an empty film or no work. bandRows:
+// the rows read at a time (the estimate does not depend on it beyond rounding).
+bool estimateError(const ErrorFilms& films, const std::vector<double>& work,
+                   double zRelativeVariance, ErrorEstimate* out, std::string* error,
+                   int bandRows = 64);
+
+// The same from whole images. groups: the groups' images (G >= 2, each of image's size);
+// image: their work-weighted mean. False with *error also for sizes that differ.
 bool estimateError(const std::vector<Image>& groups, const std::vector<double>& work,
                    const Image& image, double zRelativeVariance, ErrorEstimate* out,
-                   std::string* error);
+                   std::string* error, int bandRows = 64);
 
 }  // namespace farm

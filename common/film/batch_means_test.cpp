@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -126,6 +127,34 @@ TEST(BatchMeans, AddsTheSharedNormalizationsVariance) {
   EXPECT_NEAR(e.relMse, expected / 3, 1e-6);
   ASSERT_TRUE(estimateError(groups, {1, 2, 3}, image, 0, &e, nullptr));
   EXPECT_EQ(e.relMse, 0);
+}
+
+// Images read a band of rows at a time, as the coordinator resolves them from its films: each
+// read holds a band and the neighbour window's four rows above and below it, and the estimate
+// is the whole images' to rounding, whatever the band (one row, bands that do not divide the
+// height, or the whole).
+class CountingFilms : public ImageFilms {
+ public:
+  using ImageFilms::ImageFilms;
+  void rows(size_t g, int y0, int y1, float* out) const override {
+    mostRows = std::max(mostRows, y1 - y0);
+    ImageFilms::rows(g, y0, y1, out);
+  }
+  mutable int mostRows = 0;
+};
+
+TEST(BatchMeans, ReadsTheImagesABandAtATime) {
+  const Drawn d = draw({1, 2, 3, 10}, 0.3, 11);
+  ErrorEstimate whole;
+  ASSERT_TRUE(estimateError(d.groups, d.work, d.mean, 0.001, &whole, nullptr, 100));
+  for (int band : {1, 7, 64}) {
+    CountingFilms films(d.groups, d.mean);
+    ErrorEstimate e;
+    ASSERT_TRUE(estimateError(films, d.work, 0.001, &e, nullptr, band));
+    EXPECT_NEAR(e.relMse, whole.relMse, 1e-12 * whole.relMse) << band;
+    EXPECT_NEAR(e.rmse, whole.rmse, 1e-12 * whole.rmse) << band;
+    EXPECT_LE(films.mostRows, band + 8) << band;
+  }
 }
 
 TEST(BatchMeans, RefusesWhatItCannotEstimate) {

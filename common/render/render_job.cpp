@@ -352,25 +352,56 @@ void RenderJob::runChain(const ChainSpec& spec, const std::function<bool(ChainFl
     runSampleChain(*scene_, spec, onFlush, cancel);
 }
 
-Image RenderJob::resolve(const std::vector<double>& sums, double scale) const {
+template <class Sum>
+void RenderJob::resolveFilmRows(const std::vector<Sum>& sums, double scale, int y0, int y1,
+                                float* out) const {
   // Every estimator splats into pixel j with its filter h_j, so pixel j's expectation is the
   // integral of h_j L over the film. Dividing by the filter's mass on the film makes border
   // pixels the filter-weighted average that renderers report (no dark rim).
-  Image image(width(), height());
-  if (sums.size() < image.rgb.size()) return image;
+  const int w = width();
   const PixelFilter filter = PixelFilter::of(scene_->description().camera);
-  std::vector<double> massX(size_t(image.width));
-  for (int x = 0; x < image.width; ++x)
-    massX[size_t(x)] = pixelFilterMassInside(filter, x, image.width);
-  for (int y = 0; y < image.height; ++y) {
-    const double wy = pixelFilterMassInside(filter, y, image.height);
-    for (int x = 0; x < image.width; ++x) {
-      double w = wy * massX[size_t(x)];
-      size_t i = (size_t(y) * image.width + x) * 3;
-      for (int c = 0; c < 3; ++c) image.rgb[i + c] = float(sums[i + c] * scale / w);
+  std::vector<double> massX(static_cast<size_t>(w));
+  for (int x = 0; x < w; ++x) massX[size_t(x)] = pixelFilterMassInside(filter, x, w);
+  for (int y = y0; y < y1; ++y) {
+    const double wy = pixelFilterMassInside(filter, y, height());
+    for (int x = 0; x < w; ++x) {
+      const double mass = wy * massX[size_t(x)];
+      const size_t i = (size_t(y) * w + x) * 3;
+      float* o = out + (size_t(y - y0) * w + x) * 3;
+      for (int c = 0; c < 3; ++c) o[c] = float(double(sums[i + c]) * scale / mass);
     }
   }
+}
+
+Image RenderJob::resolve(const std::vector<double>& sums, double scale) const {
+  Image image(width(), height());
+  if (sums.size() >= image.rgb.size()) resolveFilmRows(sums, scale, 0, height(), image.rgb.data());
   return image;
+}
+
+Image RenderJob::resolve(const std::vector<float>& sums, double scale) const {
+  Image image(width(), height());
+  if (sums.size() >= image.rgb.size()) resolveFilmRows(sums, scale, 0, height(), image.rgb.data());
+  return image;
+}
+
+void RenderJob::checkRows(size_t sums, int y0, int y1) const {
+  if (sums < size_t(width()) * size_t(height()) * 3 || y0 < 0 || y1 > height() || y0 > y1)
+    throw std::invalid_argument("rows " + std::to_string(y0) + " to " + std::to_string(y1) +
+                                " of a film of " + std::to_string(sums) + " sums, not of " +
+                                std::to_string(width()) + "x" + std::to_string(height()));
+}
+
+void RenderJob::resolveRows(const std::vector<double>& sums, double scale, int y0, int y1,
+                            float* out) const {
+  checkRows(sums.size(), y0, y1);
+  resolveFilmRows(sums, scale, y0, y1, out);
+}
+
+void RenderJob::resolveRows(const std::vector<float>& sums, double scale, int y0, int y1,
+                            float* out) const {
+  checkRows(sums.size(), y0, y1);
+  resolveFilmRows(sums, scale, y0, y1, out);
 }
 
 ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t workDone,

@@ -102,12 +102,21 @@ class RenderJob {
 
   // Image from summed splats (double) and the scale above.
   Image resolve(const std::vector<double>& sums, double scale) const;
+  Image resolve(const std::vector<float>& sums, double scale) const;  // an error group's film
+  // Rows [y0, y1) of what resolve() answers, into out (3 floats a pixel), from a film of
+  // width*height*3 sums: for what reads an image a band at a time (batch_means.h).
+  void resolveRows(const std::vector<double>& sums, double scale, int y0, int y1, float* out) const;
+  void resolveRows(const std::vector<float>& sums, double scale, int y0, int y1, float* out) const;
   // EXR header attributes describing this render.
   // `largeSteps`: the chains' large steps, pooled into Z as imageScale() pools them.
   ImageMetadata metadata(const BootstrapResult& bootstrap, int64_t workDone, double seconds,
                          const LargeStepSums& largeSteps = LargeStepSums()) const;
 
  private:
+  void checkRows(size_t sums, int y0, int y1) const;  // throws for rows resolveRows cannot fill
+  template <class Sum>
+  void resolveFilmRows(const std::vector<Sum>& sums, double scale, int y0, int y1,
+                       float* out) const;
   std::vector<ChainSpec> planTiles(const BootstrapResult& bootstrap) const;  // erpt
 
   std::shared_ptr<const Scene> scene_;
