@@ -14,6 +14,11 @@ namespace {
 // zero runs that make up most of a sparse film.
 constexpr int kZstdLevel = 1;
 
+// The wire is little-endian; on such a machine a dense film's bytes are already its wire form,
+// and are compressed from, and decompressed into, the film itself, without a copy of it (a
+// 3840x2160 film is 95 MiB).
+constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+
 void putU32(std::string* out, uint32_t v) {
   char b[4];
   for (int i = 0; i < 4; ++i) b[i] = char((v >> (8 * i)) & 0xff);
@@ -50,8 +55,17 @@ EncodedSplats encodeSplats(const std::vector<float>& dense) {
   for (size_t p = 0; p < pixels; ++p) {
     touched += dense[3 * p] != 0.0f || dense[3 * p + 1] != 0.0f || dense[3 * p + 2] != 0.0f;
   }
+  const size_t denseBytes = dense.size() * sizeof(float);
+  if (kLittleEndian && touched * kSparseRecordBytes >= denseBytes) {
+    e.rawBytes = denseBytes;
+    std::string frame = zstdCompress(dense.data(), denseBytes, kZstdLevel);
+    e.compressed = frame.size() < denseBytes;
+    e.bytes = e.compressed ? std::move(frame)
+                           : std::string(reinterpret_cast<const char*>(dense.data()), denseBytes);
+    return e;
+  }
   std::string raw;
-  if (touched * kSparseRecordBytes < dense.size() * sizeof(float)) {
+  if (touched * kSparseRecordBytes < denseBytes) {
     e.sparse = true;
     raw.reserve(touched * kSparseRecordBytes);
     for (size_t p = 0; p < pixels; ++p) {
@@ -94,6 +108,23 @@ bool decodeSplats(const EncodedSplats& e, size_t values, std::vector<float>* den
              std::to_string(kSparseRecordBytes) + "-byte records for at most " +
              std::to_string(pixels) + " pixels";
     return false;
+  }
+  if (kLittleEndian && !e.sparse) {
+    dense->resize(values);
+    if (e.compressed) {
+      if (!zstdDecompressExact(e.bytes, dense->data(), size_t(denseBytes))) {
+        *error = "the compressed splats are corrupt or do not hold the " +
+                 std::to_string(denseBytes) + " bytes the header announces";
+        return false;
+      }
+    } else if (e.bytes.size() != denseBytes) {
+      *error = "the splats take " + std::to_string(e.bytes.size()) + " bytes, not " +
+               std::to_string(denseBytes);
+      return false;
+    } else {
+      std::memcpy(dense->data(), e.bytes.data(), size_t(denseBytes));
+    }
+    return true;
   }
   std::string decompressed;
   const std::string* raw = &e.bytes;

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <random>
 
+#include "proto/zstd_frame.h"
+
 namespace farm {
 namespace {
 
@@ -34,6 +36,37 @@ TEST(SplatCodec, EveryFormDecodesToItsFilm) {
     // Sparse exactly when the records are smaller than the dense film.
     EXPECT_EQ(e.sparse, touched < 0.7) << touched;
     EXPECT_LE(e.bytes.size(), original.size() * sizeof(float));
+  }
+}
+
+// The dense form on the wire is each value's float32 bits, least significant byte first,
+// whatever the machine: what a worker sends from its film's own bytes decodes, byte by byte, to
+// that, compressed (a film with zero runs) or not (random bits, which zstd cannot shrink).
+TEST(SplatCodec, TheDenseFormIsLittleEndianFloats) {
+  for (double touched : {0.8, 1.0}) {
+    std::vector<float> original = film(64 * 48, touched, 3);
+    if (touched == 1.0) {
+      std::mt19937 rng(5);
+      for (float& v : original) {
+        const uint32_t bits = uint32_t(rng());  // every bit random: nothing for zstd to take
+        std::memcpy(&v, &bits, 4);
+      }
+    }
+    const EncodedSplats e = encodeSplats(original);
+    ASSERT_FALSE(e.sparse);
+    EXPECT_EQ(e.compressed, touched < 1.0);
+    std::string raw = e.bytes;
+    if (e.compressed) {
+      raw.assign(original.size() * 4, '\0');
+      ASSERT_TRUE(zstdDecompressExact(e.bytes, raw.data(), raw.size()));
+    }
+    ASSERT_EQ(raw.size(), original.size() * 4);
+    for (size_t i = 0; i < original.size(); ++i) {
+      uint32_t bits;
+      std::memcpy(&bits, &original[i], 4);
+      for (int b = 0; b < 4; ++b)
+        ASSERT_EQ(uint8_t(raw[4 * i + size_t(b)]), uint8_t(bits >> (8 * b))) << i;
+    }
   }
 }
 

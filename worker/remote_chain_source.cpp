@@ -362,14 +362,25 @@ std::vector<BatchAnswer> RemoteChainSource::Impl::sendBatch(const std::vector<Ba
   film.width = first.width;
   film.height = first.height;
   if (items.size() > 1) {
-    std::vector<double> sum(first.splats.size(), 0.0);
+    const size_t values = first.splats.size();
     for (const BatchItem* item : items) {
-      if (item->flush.splats.size() != sum.size()) {
+      if (item->flush.splats.size() != values) {
         throw std::runtime_error("the flushes of one job differ in film size");
       }
-      for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(item->flush.splats[i]);
     }
-    film.splats.assign(sum.begin(), sum.end());
+    // A block at a time, so that the double sum never holds more than a block of the film.
+    constexpr size_t kBlock = 1 << 14;
+    std::vector<double> sum(std::min(values, kBlock));
+    film.splats.resize(values);
+    for (size_t start = 0; start < values; start += kBlock) {
+      const size_t end = std::min(values, start + kBlock);
+      std::fill(sum.begin(), sum.end(), 0.0);
+      for (const BatchItem* item : items) {
+        const std::vector<float>& splats = item->flush.splats;
+        for (size_t i = start; i < end; ++i) sum[i - start] += double(splats[i]);
+      }
+      for (size_t i = start; i < end; ++i) film.splats[i] = float(sum[i - start]);
+    }
   }
   const EncodedSplats splats = encodeSplats(items.size() == 1 ? first.splats : film.splats);
   Sha256 digest;
