@@ -460,7 +460,7 @@ std::shared_ptr<Scene> loadScene(const std::string& path, const RenderSettings& 
   }
   if (settings.shadingNormals != ShadingNormals::Scene)
     desc.strictNormals = settings.shadingNormals == ShadingNormals::Strict;
-  return std::make_shared<Scene>(desc);
+  return std::make_shared<Scene>(std::move(desc));
 }
 
 }  // namespace farm

@@ -125,7 +125,7 @@ bool pointOnPrimitive(const ShapeDescription& s, uint32_t t, const Vec2f& u, Vec
 
 }  // namespace
 
-Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
+Scene::Scene(SceneDescription desc) : desc_(std::move(desc)), camera_(desc_.camera) {
   // Textures refer only to earlier ones (no cycles), and every reference is in range: what the
   // loaders guarantee, checked here for descriptions built by hand.
   const int numTextures = int(desc_.textures.size());
@@ -208,17 +208,22 @@ Scene::Scene(const SceneDescription& desc) : desc_(desc), camera_(desc.camera) {
     } else {
       const size_t nv = s.positions.size(), nt = s.indices.size() / 3;
       geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-      float* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-          geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
+      // Embree reads the description's own arrays, which the scene keeps unchanged for its
+      // life, instead of copies of them. It may load a buffer's last element 16 bytes at a
+      // time, so each allocation holds a little more than the mesh.
+      static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Embree's FLOAT3 vertices are packed");
+      std::vector<Vec3f>& positions = desc_.shapes[size_t(i)].positions;
+      positions.reserve(nv + 1);
+      rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                 positions.data(), 0, sizeof(Vec3f), nv);
       for (size_t k = 0; k < nv; ++k) {
-        v[3 * k] = s.positions[k].x, v[3 * k + 1] = s.positions[k].y,
-              v[3 * k + 2] = s.positions[k].z;
         lo = vmin(lo, s.positions[k]);
         hi = vmax(hi, s.positions[k]);
       }
-      unsigned* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-          geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
-      std::copy(s.indices.begin(), s.indices.begin() + 3 * nt, idx);
+      std::vector<uint32_t>& indices = desc_.shapes[size_t(i)].indices;
+      indices.reserve(3 * nt + 4);  // the same for the indices
+      rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices.data(),
+                                 0, 3 * sizeof(uint32_t), nt);
       if (s.isEmitter) {
         cdf.reserve(nt);
         for (size_t t = 0; t < nt; ++t) {
