@@ -146,7 +146,7 @@ Status JobStore::setPhase(const std::string& id, JobPhase phase, const std::stri
                           double elapsedSeconds, const SplatAggregator::Snapshot* finalCounts) {
   std::string counts;
   if (finalCounts) {
-    if (!finalCounts->sums.empty()) {
+    if (!finalCounts->sums.empty() || !finalCounts->groupSums.empty()) {
       throw std::invalid_argument("JobStore::setPhase keeps an ended job's counts, not its film");
     }
     counts = store::encodeCheckpoint(*finalCounts, {});

@@ -95,6 +95,7 @@ class JobStore {
   Status appendBatch(const std::string& id, const FlushBatch& batch, double elapsedSeconds,
                      uint64_t* tailBytes, const EncodedSplats* wire = nullptr);
   // Replaces the job's log so far by this state of its sums (a file beside the log) and chains.
+  // Reads the aggregator's films in place: the caller holds what guards them (the job's lock).
   Status checkpoint(const std::string& id, const SplatAggregator& sums,
                     const std::vector<ChainScheduler::ChainSnapshot>& chains);
   Status addErrorSample(const std::string& id, uint32_t index, const ErrorSample& sample);

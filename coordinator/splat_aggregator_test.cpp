@@ -190,6 +190,14 @@ TEST(SplatAggregator, KeepsEachGroupsFilmBesideTheImage) {
   EXPECT_EQ(one.groups(), 1u);
   EXPECT_THROW(one.groupSums(0), std::out_of_range);
   EXPECT_TRUE(one.snapshot().groupSums.empty());
+  // An ended job keeps its counts alone (SplatAggregator::snapshot(false)), and comes back with
+  // no film of any size, whatever its groups.
+  const SplatAggregator ended(0, 0, {0, 1, 1}, sum.snapshot(false));
+  EXPECT_EQ(ended.groups(), 2u);
+  EXPECT_EQ(ended.workDone(), 300);
+  EXPECT_EQ(ended.groupWork(1), 200);
+  EXPECT_TRUE(ended.sums().empty());
+  EXPECT_TRUE(ended.groupSums(1).empty());
   // A snapshot whose group films do not match the job's groups is refused, not half-restored.
   SplatAggregator::Snapshot wrong = sum.snapshot();
   wrong.groupSums.pop_back();

@@ -379,12 +379,6 @@ Image RenderJob::resolve(const std::vector<double>& sums, double scale) const {
   return image;
 }
 
-Image RenderJob::resolve(const std::vector<float>& sums, double scale) const {
-  Image image(width(), height());
-  if (sums.size() >= image.rgb.size()) resolveFilmRows(sums, scale, 0, height(), image.rgb.data());
-  return image;
-}
-
 void RenderJob::checkRows(size_t sums, int y0, int y1) const {
   if (sums < size_t(width()) * size_t(height()) * 3 || y0 < 0 || y1 > height() || y0 > y1)
     throw std::invalid_argument("rows " + std::to_string(y0) + " to " + std::to_string(y1) +

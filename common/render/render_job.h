@@ -102,7 +102,6 @@ class RenderJob {
 
   // Image from summed splats (double) and the scale above.
   Image resolve(const std::vector<double>& sums, double scale) const;
-  Image resolve(const std::vector<float>& sums, double scale) const;  // an error group's film
   // Rows [y0, y1) of what resolve() answers, into out (3 floats a pixel), from a film of
   // width*height*3 sums: for what reads an image a band at a time (batch_means.h).
   void resolveRows(const std::vector<double>& sums, double scale, int y0, int y1, float* out) const;
