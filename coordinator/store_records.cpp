@@ -1,6 +1,7 @@
 #include "coordinator/store_records.h"
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -274,15 +275,17 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, uint32_t groups,
     s->sums.assign(values, 0.0);
     s->groupSums.assign(groupFilms, std::vector<float>(values));
     bool read = false;
-    if (r.sums_layout() == 0) {
-      std::vector<double> films(size_t(std::max<uint32_t>(groups, 1)) * values);
-      read = zstdDecompressExact(frames, films.data(), films.size() * sizeof(double));
-      for (size_t g = 0; read && g * values < films.size(); ++g) {
+    if (r.sums_layout() == 0) {  // a group's film at a time: the image is their sum in order
+      auto addGroup = [&](const char* film, size_t g) {
         for (size_t i = 0; i < values; ++i) {
-          s->sums[i] += films[g * values + i];
-          if (groupFilms > 0) s->groupSums[g][i] = float(films[g * values + i]);
+          double v;
+          std::memcpy(&v, film + i * sizeof(double), sizeof(double));
+          s->sums[i] += v;
+          if (groupFilms > 0) s->groupSums[g][i] = float(v);
         }
-      }
+      };
+      read = zstdDecompressChunks(frames, values * sizeof(double), std::max<uint32_t>(groups, 1),
+                                  addGroup);
     } else if (r.sums_layout() == 1) {
       std::vector<std::pair<void*, size_t>> outs = {{s->sums.data(), values * sizeof(double)}};
       for (std::vector<float>& g : s->groupSums)

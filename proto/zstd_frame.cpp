@@ -35,6 +35,35 @@ bool zstdDecompressExact(const std::string& frame, void* out, size_t size) {
   return decompressExact(frame.data(), frame.size(), out, size);
 }
 
+bool zstdDecompressChunks(const std::string& frame, size_t chunkSize, size_t chunks,
+                          const std::function<void(const char* chunk, size_t k)>& each) {
+  const unsigned long long content = ZSTD_getFrameContentSize(frame.data(), frame.size());
+  if (chunkSize == 0 || content != chunkSize * chunks) return false;
+  std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> context(ZSTD_createDCtx(), ZSTD_freeDCtx);
+  if (!context) return false;
+  std::unique_ptr<char[]> chunk(new char[chunkSize]);
+  ZSTD_inBuffer in{frame.data(), frame.size(), 0};
+  size_t k = 0, left = 1;
+  while (k < chunks) {
+    ZSTD_outBuffer out{chunk.get(), chunkSize, 0};
+    while (out.pos < out.size) {
+      const size_t before = in.pos + out.pos;
+      left = ZSTD_decompressStream(context.get(), &out, &in);
+      if (ZSTD_isError(left) || (left == 0 && out.pos < out.size) ||
+          in.pos + out.pos == before)  // no progress: the frame ends short
+        return false;
+    }
+    each(chunk.get(), k++);
+  }
+  while (left != 0) {  // what may follow the last byte: the frame's end, its checksum
+    ZSTD_outBuffer none{nullptr, 0, 0};
+    const size_t before = in.pos;
+    left = ZSTD_decompressStream(context.get(), &none, &in);
+    if (ZSTD_isError(left) || (left != 0 && in.pos == before)) return false;
+  }
+  return in.pos == in.size;
+}
+
 bool zstdDecompressFrames(const std::string& frames,
                           const std::vector<std::pair<void*, size_t>>& outs) {
   size_t at = 0;
