@@ -13,7 +13,7 @@ scene=${FARM_SHARED_DIR:-../shared}/scenes/cornell-box/scene.xml
 out=$(mktemp -d)
 # The processes started inside command substitutions are not this shell's jobs: their pids go
 # to a file that the exit trap reads.
-trap 'xargs -r kill < "$out/pids" 2>/dev/null; rm -rf "$out"' EXIT
+trap 'xargs -r kill < "$out/pids" 2>/dev/null || true; rm -rf "$out"' EXIT
 touch "$out/pids"
 options=(--width 256 --height 256 --seed 5)
 fail() { echo "thread_scaling.sh: $*" >&2; exit 1; }
@@ -49,6 +49,7 @@ processes() {  # algorithm budget-flag budget processes
     fail "farm fetch failed: $(tail -3 "$out/fetch.log")"
   kill "${pids[@]}" 2>/dev/null
   wait "${pids[@]}" 2>/dev/null || true
+  : > "$out/pids"  # reaped: their numbers may be another process's by the exit
   rate_of < "$out/fetch.log"
 }
 add() {  # running sum, refusing a run that reported no rate

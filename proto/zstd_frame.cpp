@@ -56,7 +56,8 @@ bool zstdDecompressChunks(const std::string& frame, size_t chunkSize, size_t chu
     each(chunk.get(), k++);
   }
   while (left != 0) {  // what may follow the last byte: the frame's end, its checksum
-    ZSTD_outBuffer none{nullptr, 0, 0};
+    char spare;  // no room for output (a null buffer trips UBSan in older zstd releases)
+    ZSTD_outBuffer none{&spare, 0, 0};
     const size_t before = in.pos;
     left = ZSTD_decompressStream(context.get(), &none, &in);
     if (ZSTD_isError(left) || (left != 0 && in.pos == before)) return false;
