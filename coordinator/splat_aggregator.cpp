@@ -19,8 +19,9 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
       sums_(filmValues(), 0.0),
       groupWork_(groupCount(chainGroup_), 0),
       nextFlush_(chainGroup_.size(), 0) {
-  if (groupWork_.size() >= 2)
-    groupSums_.assign(groupWork_.size(), std::vector<float>(filmValues()));
+  // One film at a time: assign() from a prototype would allocate a film for none as well.
+  for (uint32_t g = 0; g < groupFilmCount(uint32_t(groupWork_.size())); ++g)
+    groupSums_.emplace_back(filmValues());
 }
 
 SplatAggregator::SplatAggregator(int width, int height, uint32_t numChains)
@@ -44,7 +45,7 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
     throw std::invalid_argument("the snapshot's film holds " +
                                 std::to_string(snapshot.sums.size()) + " values, not " + film);
   }
-  const size_t groupFilms = groups >= 2 ? groups : 0;
+  const size_t groupFilms = groupFilmCount(uint32_t(groups));
   if (values == 0 && snapshot.groupSums.empty())  // an ended job's counts: no films
     snapshot.groupSums.resize(groupFilms);
   if (snapshot.groupSums.size() != groupFilms) {

@@ -69,6 +69,9 @@ class SplatAggregator {
   SplatAggregator(int width, int height, std::vector<uint32_t> chainGroups, Snapshot snapshot);
   // How many groups chainGroups names (1 + the largest; 1 when empty).
   static uint32_t groupCount(const std::vector<uint32_t>& chainGroups);
+  // How many films of their own `groups` groups keep: one each with two or more, none with one
+  // (its film is the image's).
+  static uint32_t groupFilmCount(uint32_t groups) { return groups >= 2 ? groups : 0; }
 
   // What addBatch() would answer, changing nothing, in parts: a flush's place and counts (what a
   // batch entry carries), its film, and the entries' groups. A durable coordinator records a

@@ -239,7 +239,7 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
 std::string encodeFilms(const SplatAggregator& sums) {
   const std::vector<double>& image = sums.sums();
   std::string frames = zstdCompress(image.data(), image.size() * sizeof(double));
-  for (uint32_t g = 0; g < sums.groups() && sums.groups() >= 2; ++g) {
+  for (uint32_t g = 0; g < SplatAggregator::groupFilmCount(sums.groups()); ++g) {
     const std::vector<float>& film = sums.groupSums(g);
     frames += zstdCompress(film.data(), film.size() * sizeof(float));
   }
@@ -271,9 +271,10 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, uint32_t groups,
         return false;
       }
     }
-    const size_t groupFilms = groups >= 2 ? groups : 0;
+    const size_t groupFilms = SplatAggregator::groupFilmCount(groups);
     s->sums.assign(values, 0.0);
-    s->groupSums.assign(groupFilms, std::vector<float>(values));
+    s->groupSums.clear();
+    for (size_t g = 0; g < groupFilms; ++g) s->groupSums.emplace_back(values);
     bool read = false;
     if (r.sums_layout() == 0) {  // a group's film at a time: the image is their sum in order
       auto addGroup = [&](const char* film, size_t g) {

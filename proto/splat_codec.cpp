@@ -56,38 +56,36 @@ EncodedSplats encodeSplats(const std::vector<float>& dense) {
     touched += dense[3 * p] != 0.0f || dense[3 * p + 1] != 0.0f || dense[3 * p + 2] != 0.0f;
   }
   const size_t denseBytes = dense.size() * sizeof(float);
-  if (kLittleEndian && touched * kSparseRecordBytes >= denseBytes) {
-    e.rawBytes = denseBytes;
-    std::string frame = zstdCompress(dense.data(), denseBytes, kZstdLevel);
-    e.compressed = frame.size() < denseBytes;
-    e.bytes = e.compressed ? std::move(frame)
-                           : std::string(reinterpret_cast<const char*>(dense.data()), denseBytes);
-    return e;
-  }
+  e.sparse = touched * kSparseRecordBytes < denseBytes;
+  // The form before compression: a dense film's own bytes where they are already its wire form
+  // (a little-endian machine), else written out here.
+  const bool written = e.sparse || !kLittleEndian;
   std::string raw;
-  if (touched * kSparseRecordBytes < denseBytes) {
-    e.sparse = true;
+  if (e.sparse) {
     raw.reserve(touched * kSparseRecordBytes);
     for (size_t p = 0; p < pixels; ++p) {
       if (dense[3 * p] == 0.0f && dense[3 * p + 1] == 0.0f && dense[3 * p + 2] == 0.0f) continue;
       putU32(&raw, uint32_t(p));
       for (int c = 0; c < 3; ++c) putF32(&raw, dense[3 * p + size_t(c)]);
     }
-  } else {
-    raw.resize(dense.size() * sizeof(float));
+  } else if (written) {
+    raw.resize(denseBytes);
     for (size_t i = 0; i < dense.size(); ++i) {
       std::string word;
       putF32(&word, dense[i]);
       std::memcpy(&raw[4 * i], word.data(), 4);
     }
   }
-  e.rawBytes = raw.size();
-  std::string frame = zstdCompress(raw.data(), raw.size(), kZstdLevel);
-  if (frame.size() < raw.size()) {
-    e.compressed = true;
+  const char* rawData = written ? raw.data() : reinterpret_cast<const char*>(dense.data());
+  e.rawBytes = written ? raw.size() : denseBytes;
+  std::string frame = zstdCompress(rawData, size_t(e.rawBytes), kZstdLevel);
+  e.compressed = frame.size() < e.rawBytes;
+  if (e.compressed) {
     e.bytes = std::move(frame);
-  } else {
+  } else if (written) {
     e.bytes = std::move(raw);
+  } else {
+    e.bytes.assign(rawData, size_t(e.rawBytes));
   }
   return e;
 }
@@ -109,46 +107,40 @@ bool decodeSplats(const EncodedSplats& e, size_t values, std::vector<float>* den
              std::to_string(pixels) + " pixels";
     return false;
   }
-  if (kLittleEndian && !e.sparse) {
-    dense->resize(values);
-    if (e.compressed) {
-      if (!zstdDecompressExact(e.bytes, dense->data(), size_t(denseBytes))) {
-        *error = "the compressed splats are corrupt or do not hold the " +
-                 std::to_string(denseBytes) + " bytes the header announces";
-        return false;
-      }
-    } else if (e.bytes.size() != denseBytes) {
-      *error = "the splats take " + std::to_string(e.bytes.size()) + " bytes, not " +
-               std::to_string(denseBytes);
-      return false;
-    } else {
-      std::memcpy(dense->data(), e.bytes.data(), size_t(denseBytes));
-    }
-    return true;
-  }
+  // A dense film's form before compression is, on a little-endian machine, the film's own
+  // bytes: it is decompressed (or copied) straight into the film.
+  const bool direct = kLittleEndian && !e.sparse;
+  if (direct) dense->assign(values, 0.0f);
   std::string decompressed;
-  const std::string* raw = &e.bytes;
+  const char* raw = e.bytes.data();
   if (e.compressed) {
-    decompressed.resize(size_t(expectedRaw));
-    if (!zstdDecompressExact(e.bytes, decompressed.data(), decompressed.size())) {
+    char* target = reinterpret_cast<char*>(dense->data());
+    if (!direct) {
+      decompressed.resize(size_t(expectedRaw));
+      target = decompressed.data();
+    }
+    if (!zstdDecompressExact(e.bytes, target, size_t(expectedRaw))) {
       *error = "the compressed splats are corrupt or do not hold the " +
                std::to_string(expectedRaw) + " bytes the header announces";
       return false;
     }
-    raw = &decompressed;
+    raw = target;
   } else if (e.bytes.size() != expectedRaw) {
     *error = "the splats take " + std::to_string(e.bytes.size()) + " bytes, not " +
              std::to_string(expectedRaw);
     return false;
+  } else if (direct) {
+    std::memcpy(dense->data(), raw, size_t(expectedRaw));
   }
+  if (direct) return true;
   dense->assign(values, 0.0f);
   if (!e.sparse) {
-    for (size_t i = 0; i < values; ++i) (*dense)[i] = getF32(raw->data() + 4 * i);
+    for (size_t i = 0; i < values; ++i) (*dense)[i] = getF32(raw + 4 * i);
     return true;
   }
   int64_t previous = -1;
-  for (size_t at = 0; at < raw->size(); at += kSparseRecordBytes) {
-    const uint32_t pixel = getU32(raw->data() + at);
+  for (size_t at = 0; at < size_t(expectedRaw); at += kSparseRecordBytes) {
+    const uint32_t pixel = getU32(raw + at);
     if (int64_t(pixel) <= previous || pixel >= pixels) {
       *error = "a sparse splat record names pixel " + std::to_string(pixel) +
                (pixel >= pixels ? " (off the film)" : " (out of order)");
@@ -156,7 +148,7 @@ bool decodeSplats(const EncodedSplats& e, size_t values, std::vector<float>* den
     }
     previous = pixel;
     for (int c = 0; c < 3; ++c) {
-      (*dense)[3 * size_t(pixel) + size_t(c)] = getF32(raw->data() + at + 4 + 4 * size_t(c));
+      (*dense)[3 * size_t(pixel) + size_t(c)] = getF32(raw + at + 4 + 4 * size_t(c));
     }
   }
   return true;
