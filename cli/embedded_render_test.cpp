@@ -414,3 +414,46 @@ TEST(EmbeddedRender, UntilErrorStopsOnceTheEstimateIsThere) {
 
 }  // namespace
 }  // namespace farm
+
+namespace farm {
+namespace {
+
+// A pixel allocation reaches the workers in every work unit (it changes the image, and the
+// farm's image is the one a render here makes with it); a job whose film is not the
+// allocation's is refused with both sizes named.
+TEST(EmbeddedRender, PixelAllocationReachesTheWorkers) {
+  EmbeddedRenderOptions o = options(Algorithm::Bidirectional, 2, 2);
+  std::vector<float> density;
+  std::vector<uint8_t> bidirectional;
+  for (int c = 0; c < 36; ++c) {  // 6x6 cells of 4 pixels
+    density.push_back(float(1 + c % 4));
+    bidirectional.push_back(uint8_t(c % 3 == 0));
+  }
+  o.settings.pixelAllocation =
+      std::make_shared<const PixelAllocation>(24, 24, 4, density, bidirectional);
+  EmbeddedRenderResult farm, uniform;
+  Status s = renderEmbedded(o, &farm);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  RenderSettings settings = o.settings;
+  const LocalRenderResult here =
+      renderLocally(RenderJob(loadScene(kScene, settings), settings, "here"));
+  ASSERT_NO_FATAL_FAILURE(expectSameImage(farm.image, here.image, Algorithm::Bidirectional));
+  o.settings.pixelAllocation.reset();
+  s = renderEmbedded(o, &uniform);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  size_t differ = 0;
+  for (size_t i = 0; i < here.image.rgb.size(); ++i)
+    if (farm.image.rgb[i] != uniform.image.rgb[i]) ++differ;
+  EXPECT_GT(differ, here.image.rgb.size() / 2);
+
+  o.settings.pixelAllocation = std::make_shared<const PixelAllocation>(
+      24, 12, 4, std::vector<float>(18, 1.0f), std::vector<uint8_t>(18, 0));
+  o.settings.height = 0;  // the scene's aspect: 24x24, not the allocation's 24x12
+  s = renderEmbedded(o, &farm);
+  ASSERT_FALSE(s.isOk());
+  EXPECT_NE(s.message().find("pixel allocation is for a film of 24x12"), std::string::npos)
+      << s.message();
+}
+
+}  // namespace
+}  // namespace farm

@@ -10,7 +10,11 @@
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
+#include <memory>
+#include <stdexcept>
 #include <thread>
 
 #include "cli/compare.h"
@@ -71,6 +75,7 @@ struct RenderOptions {
   bool noPlan = false;
   bool pilot = false;
   bool combineLargeSteps = false;
+  std::string pixelAllocation;
   std::string shadingNormals = "scene";
   int maxDepth = 0;
   CLI::Option *timeOption = nullptr, *widthOption = nullptr, *heightOption = nullptr;
@@ -100,6 +105,11 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                     "pssmlt, pssmlt-pt, mmlt: count each large step's proposal also as an "
                     "independent sample, weighted against the chain by multiple importance "
                     "sampling (Kelemen et al. 2002, 4.1); Z is then the bootstrap's alone");
+  command->add_option("--pixel-allocation", o->pixelAllocation,
+                      "pt, bdpt: FILE of where the samples land and which of the two estimators "
+                      "takes each cell of the film (common/film/pixel_allocation.h's byte form, "
+                      "as tools/pixel_allocation.py writes it from a pilot's images; "
+                      "docs/corpus.md); its film must be the job's");
   command
       ->add_option("--mutation-mix", o->mutationMix,
                    "mlt: relative weights of Veach's mutations, normalized over those that apply "
@@ -248,6 +258,21 @@ bool toSettings(const RenderOptions& o, farm::RenderSettings* s, std::string* er
   }
   s->largeStepProbability = o.largeStep;
   s->combineLargeSteps = o.combineLargeSteps;
+  if (!o.pixelAllocation.empty()) {
+    std::ifstream in(o.pixelAllocation, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in && !in.eof()) {
+      *error = "--pixel-allocation: cannot read " + o.pixelAllocation;
+      return false;
+    }
+    try {
+      s->pixelAllocation =
+          std::make_shared<const farm::PixelAllocation>(farm::PixelAllocation::decode(bytes));
+    } catch (const std::invalid_argument& e) {
+      *error = "--pixel-allocation " + o.pixelAllocation + ": " + e.what();
+      return false;
+    }
+  }
   s->erptChains = o.erptChains;
   s->erptLength = o.erptLength;
   s->mediumSamples = o.mediumSamples;

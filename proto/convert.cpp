@@ -1,6 +1,8 @@
 #include "proto/convert.h"
 
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 
 namespace farm {
 
@@ -44,6 +46,18 @@ bool fromProto(const v1::MutationMix& m, MutationMix* out, std::string* error) {
   }
   *out = mix;
   return true;
+}
+
+// A pixel allocation's byte form (common/film/pixel_allocation.h), checked whole.
+bool decodeAllocation(const std::string& bytes, std::shared_ptr<const PixelAllocation>* out,
+                      std::string* error) {
+  try {
+    *out = std::make_shared<const PixelAllocation>(PixelAllocation::decode(bytes));
+    return true;
+  } catch (const std::invalid_argument& e) {
+    *error = e.what();
+    return false;
+  }
 }
 }  // namespace
 
@@ -91,6 +105,7 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_pilot(settings.pilot);
   m.set_combine_large_steps(settings.combineLargeSteps);
   m.set_ignore_plan(settings.ignorePlan);
+  if (settings.pixelAllocation) m.set_pixel_allocation(settings.pixelAllocation->encode());
   m.set_shading_normals(
       settings.shadingNormals == ShadingNormals::Strict ? v1::SHADING_NORMALS_STRICT
       : settings.shadingNormals == ShadingNormals::Lax  ? v1::SHADING_NORMALS_LAX
@@ -123,6 +138,10 @@ bool fromProto(const v1::RenderSettings& m, RenderSettings* out, std::string* er
   s.pilot = m.pilot();
   s.combineLargeSteps = m.combine_large_steps();
   s.ignorePlan = m.ignore_plan();
+  if (!m.pixel_allocation().empty() &&
+      !decodeAllocation(m.pixel_allocation(), &s.pixelAllocation, error)) {
+    return false;
+  }
   switch (m.shading_normals()) {
     case v1::SHADING_NORMALS_SCENE:
       s.shadingNormals = ShadingNormals::Scene;
@@ -172,6 +191,7 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_seen_emission_every(spec.seenEmissionEvery);
   m.set_seen_emission_scale(spec.seenEmissionScale);
   m.set_large_step_mis(spec.largeStepMis);
+  if (spec.pixelAllocation) m.set_pixel_allocation(spec.pixelAllocation->encode());
   return m;
 }
 
@@ -210,6 +230,17 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
     *error = "chain " + std::to_string(s.chainIndex) + " has a bad large-step weight " +
              std::to_string(s.largeStepMis) + " (must be finite and >= 0)";
     return false;
+  }
+  if (!m.pixel_allocation().empty()) {
+    if (s.algorithm != Algorithm::PathTracing && s.algorithm != Algorithm::Bidirectional) {
+      *error = "chain " + std::to_string(s.chainIndex) + " of " + algorithmName(s.algorithm) +
+               " has a pixel allocation (only pt and bdpt take one)";
+      return false;
+    }
+    if (!decodeAllocation(m.pixel_allocation(), &s.pixelAllocation, error)) {
+      *error = "chain " + std::to_string(s.chainIndex) + ": " + *error;
+      return false;
+    }
   }
   if (s.seenEmissionEvery < 0 || !std::isfinite(s.seenEmissionScale) || s.seenEmissionScale < 0) {
     *error = "chain " + std::to_string(s.chainIndex) + " has a bad seen-emission sampling (every " +

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <set>
 #include <string>
 
@@ -110,6 +111,50 @@ TEST(Convert, CombinedLargeStepsCrossTheWire) {
     EXPECT_FALSE(fromProto(toProto(spec), &chain, &error)) << bad;
     EXPECT_NE(error.find("large-step weight"), std::string::npos) << error;
   }
+}
+
+}  // namespace
+}  // namespace farm
+
+namespace farm {
+namespace {
+
+// A pixel allocation crosses the wire in a job's settings (and so into the store, which keeps
+// them as this message) and in each pt or bdpt work unit; a malformed one, or one on a chain that
+// cannot take it, is refused with the reason.
+TEST(Convert, PixelAllocationCrossesTheWire) {
+  auto allocation = std::make_shared<const PixelAllocation>(3, 2, 2, std::vector<float>{1, 2},
+                                                            std::vector<uint8_t>{0, 1});
+  RenderSettings settings;
+  settings.algorithm = Algorithm::Bidirectional;
+  settings.pixelAllocation = allocation;
+  RenderSettings back;
+  std::string error;
+  ASSERT_TRUE(fromProto(toProto(settings), &back, &error)) << error;
+  ASSERT_TRUE(back.pixelAllocation);
+  EXPECT_EQ(back.pixelAllocation->encode(), allocation->encode());
+
+  ChainSpec spec;
+  spec.algorithm = Algorithm::PathTracing;
+  spec.flushInterval = 100;
+  spec.pixelAllocation = allocation;
+  ChainSpec chain;
+  ASSERT_TRUE(fromProto(toProto(spec), &chain, &error)) << error;
+  ASSERT_TRUE(chain.pixelAllocation);
+  EXPECT_EQ(chain.pixelAllocation->density(), allocation->density());
+
+  v1::ChainSpec truncated = toProto(spec);
+  truncated.mutable_pixel_allocation()->pop_back();
+  EXPECT_FALSE(fromProto(truncated, &chain, &error));
+  EXPECT_NE(error.find("pixel allocation"), std::string::npos) << error;
+  v1::RenderSettings badSettings = toProto(settings);
+  badSettings.set_pixel_allocation("not one");
+  EXPECT_FALSE(fromProto(badSettings, &back, &error));
+  EXPECT_NE(error.find("pixel allocation"), std::string::npos) << error;
+
+  spec.algorithm = Algorithm::PSSMLT;
+  EXPECT_FALSE(fromProto(toProto(spec), &chain, &error));
+  EXPECT_NE(error.find("only pt and bdpt"), std::string::npos) << error;
 }
 
 }  // namespace

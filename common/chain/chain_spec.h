@@ -4,10 +4,12 @@
 // independent samples; for the Markov chain algorithms a chain started from a resampled seed
 // path. Below mcmc/ and transport/ so that every chain kind shares it.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/chain/algorithm.h"
+#include "common/film/pixel_allocation.h"
 #include "common/film/splat_buffer.h"
 
 namespace farm {
@@ -26,6 +28,10 @@ struct ChainSpec {
   double largeStepMis = 0;
   // pt/bdpt: global index of the first sample (the chain covers [firstSample, firstSample+budget))
   int64_t firstSample = 0;
+  // pt/bdpt: where the samples land and which of the two estimators takes each cell of the film
+  // (common/film/pixel_allocation.h); empty: uniform over the film, the algorithm's estimator
+  // everywhere. Shared by a job's chains.
+  std::shared_ptr<const PixelAllocation> pixelAllocation;
   // The seed: a primary-sample vector (pssmlt, pssmlt-pt, mmlt) or a serialized path (mlt),
   // and its scalar contribution I.
   std::vector<float> seedSample;

@@ -16,11 +16,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/film/error_metrics.h"
 #include "common/film/image.h"
+#include "common/film/pixel_allocation.h"
 #include "common/film/splat_buffer.h"
 #include "common/mcmc/bootstrap.h"
 #include "common/render/local_render.h"
@@ -38,7 +40,25 @@ struct Case {
   std::string file = "scene.xml";
   int maxDepth = 0;  // 0: the scene's
   bool combineLargeSteps = false;
+  bool allocated = false;  // pt and bdpt by cells of the film, at uneven densities
 };
+
+// A pixel allocation that leaves nothing to luck (common/film/pixel_allocation.h): cells of 16
+// pixels, bidirectional and path-traced in a checkerboard, their densities 0.25 to 4.25 (17 to 1)
+// in a pattern the image does not follow.
+std::shared_ptr<const PixelAllocation> checkerboardAllocation(int width, int height) {
+  const int size = 16, cx = (width + size - 1) / size, cy = (height + size - 1) / size;
+  std::vector<float> density;
+  std::vector<uint8_t> bidirectional;
+  for (int y = 0; y < cy; ++y) {
+    for (int x = 0; x < cx; ++x) {
+      density.push_back(0.25f + float((7 * x + 3 * y) % 5));
+      bidirectional.push_back(uint8_t((x + y) % 2));
+    }
+  }
+  return std::make_shared<const PixelAllocation>(width, height, size, std::move(density),
+                                                 std::move(bidirectional));
+}
 
 void expectAgreement(const Case& c) {
   Image ref;
@@ -59,6 +79,7 @@ void expectAgreement(const Case& c) {
     s.seed = 1000 + k;
     s.maxDepth = c.maxDepth;
     s.combineLargeSteps = c.combineLargeSteps;
+    if (c.allocated) s.pixelAllocation = checkerboardAllocation(ref.width, ref.height);
     auto scene = loadScene(kShared + "/scenes/" + c.scene + "/" + c.file, s);
     RenderJob job(scene, s, "reference");
     r[k] = renderLocally(job);
@@ -161,6 +182,18 @@ TEST(Reference, CornellBoxPathSpace) {
 TEST(Reference, CornellBoxEnergyRedistribution) {
   expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::ERPT, 1});
 }
+// Path tracing and bidirectional path tracing by cells of the film, at uneven densities: each
+// camera sample weighted by the uniform film's density over the allocation's, each light-tracing
+// splat that lands in a bidirectional cell by one over their share of the samples.
+TEST(Reference, CornellBoxPixelAllocation) {
+  expectAgreement({"cornell-box", "cornell-box-256.exr", Algorithm::Bidirectional, 8, "scene.xml",
+                   0, false, true});
+}
+TEST(Reference, VeachBidirPixelAllocation) {
+  expectAgreement({"veach-bidir", "veach-bidir-256.exr", Algorithm::Bidirectional, 8, "scene.xml",
+                   0, false, true});
+}
+
 // The Cornell box in pbrt's form (the loader's camera, transforms, materials and area light):
 // its file asks for 5 bounces, the reference (of the Mitsuba scene) has 65, which is what is
 // compared.

@@ -45,7 +45,8 @@ std::string formatDouble(double v) {
 // Independent samples (pt, bdpt): sample k of the job uses RNG stream (seed, k). With a sample
 // budget, sample k lands in pixel k mod pixels (each pixel gets exactly spp samples, stratified
 // by order); with a time budget the film point is uniform over the image, so that stopping at
-// any count leaves the image unbiased.
+// any count leaves the image unbiased. With a pixel allocation the film point is drawn from it,
+// budget or not, and the allocation's cell says which estimator takes the sample.
 void runSampleChain(const Scene& scene, const ChainSpec& spec,
                     const std::function<bool(ChainFlush&&)>& onFlush,
                     const std::atomic<bool>* cancel) {
@@ -54,26 +55,53 @@ void runSampleChain(const Scene& scene, const ChainSpec& spec,
   PathTracer pt(scene, spec.maxDepth);
   BidirectionalTracer bdpt(scene, spec.maxDepth);
   ChainFlusher flusher(spec, scene, onFlush, cancel);
+  const PixelAllocation* allocation = spec.pixelAllocation.get();
+  if (allocation &&
+      (allocation->width() != camera.width() || allocation->height() != camera.height())) {
+    throw std::invalid_argument("pixel allocation of " + std::to_string(allocation->width()) + "x" +
+                                std::to_string(allocation->height()) + " for a film of " +
+                                std::to_string(camera.width()) + "x" +
+                                std::to_string(camera.height()));
+  }
   std::vector<Splat> splats;
   while (flusher.budgetLeft()) {
     const int64_t k = spec.firstSample + flusher.done();
     Rng rng(spec.seed, streamId(kSampleDomain, uint64_t(k)));
     IndependentSampler sampler(&rng);
-    Vec2f p;
-    if (spec.budget >= 0) {
-      int64_t pixel = k % pixels;
-      p = Vec2f(float(pixel % camera.width()) + rng.nextFloat(),
-                float(pixel / camera.width()) + rng.nextFloat());
-    } else {
-      p = Vec2f(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
-    }
-    p.x = std::min(p.x, std::nextafter(float(camera.width()), 0.0f));
-    p.y = std::min(p.y, std::nextafter(float(camera.height()), 0.0f));
     splats.clear();
-    if (spec.algorithm == Algorithm::PathTracing)
-      pt.sample(p, sampler, &splats);
-    else
-      bdpt.sample(p, sampler, &splats);
+    if (allocation) {
+      // Each sample lands where the allocation says, by its own estimator, weighted by (1) and
+      // 1 / F_B of common/film/pixel_allocation.h.
+      const float u0 = rng.nextFloat(), u1 = rng.nextFloat(), u2 = rng.nextFloat();
+      const PixelAllocation::FilmSample at = allocation->sampleFilm(u0, u1, u2);
+      if (at.bidirectional) {
+        const Spectrum cameraSum = bdpt.sampleApart(at.film, sampler, &splats);
+        splats.erase(
+            std::remove_if(splats.begin(), splats.end(),
+                           [&](const Splat& s) { return !allocation->bidirectionalAt(s.film); }),
+            splats.end());
+        for (Splat& s : splats) s.value = s.value * float(allocation->lightTracingWeight());
+        if (!isBlack(cameraSum)) splats.push_back({at.film, cameraSum * at.cameraWeight});
+      } else {
+        pt.sample(at.film, sampler, &splats);
+        for (Splat& s : splats) s.value = s.value * at.cameraWeight;
+      }
+    } else {
+      Vec2f p;
+      if (spec.budget >= 0) {
+        int64_t pixel = k % pixels;
+        p = Vec2f(float(pixel % camera.width()) + rng.nextFloat(),
+                  float(pixel / camera.width()) + rng.nextFloat());
+      } else {
+        p = Vec2f(rng.nextFloat() * camera.width(), rng.nextFloat() * camera.height());
+      }
+      p.x = std::min(p.x, std::nextafter(float(camera.width()), 0.0f));
+      p.y = std::min(p.y, std::nextafter(float(camera.height()), 0.0f));
+      if (spec.algorithm == Algorithm::PathTracing)
+        pt.sample(p, sampler, &splats);
+      else
+        bdpt.sample(p, sampler, &splats);
+    }
     for (const Splat& s : splats) {
       if (flusher.check(s.value)) flusher.film().add(s.film, s.value);
     }
@@ -91,6 +119,13 @@ RenderJob::RenderJob(std::shared_ptr<const Scene> scene, RenderSettings settings
     : scene_(std::move(scene)), settings_(std::move(settings)), jobId_(std::move(jobId)) {
   std::string problem = settings_.validate();
   if (!problem.empty()) throw std::invalid_argument(problem);
+  const PixelAllocation* allocation = settings_.pixelAllocation.get();
+  if (allocation && (allocation->width() != width() || allocation->height() != height())) {
+    throw std::invalid_argument("the pixel allocation is for a film of " +
+                                std::to_string(allocation->width()) + "x" +
+                                std::to_string(allocation->height()) + ", the scene's is " +
+                                std::to_string(width()) + "x" + std::to_string(height()));
+  }
 }
 
 RenderJob::~RenderJob() = default;
@@ -267,6 +302,8 @@ std::vector<ChainSpec> RenderJob::planChains(const BootstrapResult& bootstrap) c
         }
       }
       s.seedContribution = bootstrap.seedContributions[c];
+    } else {
+      s.pixelAllocation = settings_.pixelAllocation;
     }
     s.flushInterval = s.budget > 0 ? std::min(interval, s.budget) : interval;
     s.errorGroup = uint32_t(int64_t(c) * groups / chains);  // contiguous: a worker's chains

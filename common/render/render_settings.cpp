@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <string>
 
 namespace farm {
 
@@ -76,6 +77,15 @@ std::string RenderSettings::validate() const {
     err << "--combine-large-steps weights large steps into a chain: pssmlt, pssmlt-pt or mmlt, "
            "not "
         << algorithmName(algorithm);
+  } else if (pixelAllocation && (autoAlgorithm || (algorithm != Algorithm::PathTracing &&
+                                                   algorithm != Algorithm::Bidirectional))) {
+    err << "a pixel allocation places independent samples: pt or bdpt, not "
+        << (autoAlgorithm ? "auto" : algorithmName(algorithm));
+  } else if (pixelAllocation && ((width != 0 && width != pixelAllocation->width()) ||
+                                 (height != 0 && height != pixelAllocation->height()))) {
+    err << "the pixel allocation is for a film of " << pixelAllocation->width() << "x"
+        << pixelAllocation->height() << ", the job's is " << (width ? std::to_string(width) : "?")
+        << "x" << (height ? std::to_string(height) : "?");
   } else if (errorGroups == 1 && untilError > 0) {
     err << "--until-error needs an error estimate, which --error-groups 1 turns off";
   }

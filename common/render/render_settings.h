@@ -1,9 +1,11 @@
 #pragma once
 // The user's render options, shared by `farm render`, `farm submit` and the coordinator.
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "common/chain/algorithm.h"
+#include "common/film/pixel_allocation.h"
 
 namespace farm {
 
@@ -66,6 +68,10 @@ struct RenderSettings {
   // kErrorGroups (render_job.h); 1: no estimate, and one film on the coordinator, not one a
   // group. At most the chain count (erpt: seeds per pixel).
   int errorGroups = 0;
+  // pt, bdpt: where the samples land and which of the two estimators takes each cell of the film
+  // (common/film/pixel_allocation.h); its film must be the job's. Empty: uniform, the
+  // algorithm's estimator everywhere.
+  std::shared_ptr<const PixelAllocation> pixelAllocation;
 
   // Empty when the settings are usable, otherwise what is wrong (for the user, one line).
   std::string validate() const;

@@ -504,17 +504,23 @@ bool BidirectionalTracer::evaluateStrategy(const PathVertex* light, int s, const
   return true;
 }
 
-void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
-                                 std::vector<Splat>* splats) const {
-  // Camera strategies share the film point: one splat for their sum.
+Spectrum BidirectionalTracer::sampleApart(const Vec2f& film, Sampler& sampler,
+                                          std::vector<Splat>* lightSplats) const {
   Spectrum cameraSum(0.0f);
   visitStrategies(film, sampler, [&](const StrategyPath& p) {
     Spectrum value = p.unweighted * float(p.weight);
     if (p.t == 1)
-      splats->push_back({p.film, value});
+      lightSplats->push_back({p.film, value});
     else
       cameraSum += value;
   });
+  return cameraSum;
+}
+
+void BidirectionalTracer::sample(const Vec2f& film, Sampler& sampler,
+                                 std::vector<Splat>* splats) const {
+  // Camera strategies share the film point: one splat for their sum, after light tracing's.
+  const Spectrum cameraSum = sampleApart(film, sampler, splats);
   if (!isBlack(cameraSum)) splats->push_back({film, cameraSum});
 }
 

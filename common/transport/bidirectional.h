@@ -24,6 +24,9 @@ class BidirectionalTracer {
   // One bidirectional sample: both subpaths, every connection; splats carry the estimator's
   // values (camera strategies at `film`, light tracing where the light vertex projects).
   void sample(const Vec2f& film, Sampler& sampler, std::vector<Splat>* splats) const;
+  // The same sample apart: light tracing's splats (t = 1) appended to *lightSplats, the camera
+  // strategies' sum at `film` returned (what a pixel allocation weights apart).
+  Spectrum sampleApart(const Vec2f& film, Sampler& sampler, std::vector<Splat>* lightSplats) const;
 
   // What each strategy of a sample built: its subpaths (the path is light[0 .. s-1] followed by
   // camera[t-1 .. 0]), its unweighted value f / p as a splat would carry it (the pixel count

@@ -1,0 +1,147 @@
+#include "common/film/pixel_allocation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "common/math/bytes.h"
+
+namespace farm {
+
+namespace {
+
+constexpr uint32_t kMagic = 0x41584950;  // "PIXA"
+constexpr uint32_t kVersion = 1;
+// A film of at most 2^16 pixels a side and cells of at most that: no product overflows.
+constexpr int kMaxSide = 1 << 16;
+// Every work unit carries the allocation: 5 bytes a cell, at most 5 MiB (a film of 1024x1024
+// pixels in cells of one; a 4K film in cells of 4).
+constexpr size_t kMaxCells = size_t(1) << 20;
+
+}  // namespace
+
+int PixelAllocation::cellSizeFor(int width, int height, int maxCells) {
+  if (width <= 0 || height <= 0 || maxCells <= 0)
+    throw std::invalid_argument("pixel allocation: film and cell count must be positive");
+  int size = 1;
+  while (int64_t((width + size - 1) / size) * ((height + size - 1) / size) > maxCells) ++size;
+  return size;
+}
+
+PixelAllocation::PixelAllocation(int width, int height, int cellSize, std::vector<float> density,
+                                 std::vector<uint8_t> bidirectional)
+    : width_(width), height_(height), cellSize_(cellSize) {
+  if (width <= 0 || height <= 0 || width > kMaxSide || height > kMaxSide || cellSize <= 0 ||
+      cellSize > kMaxSide) {
+    throw std::invalid_argument("pixel allocation: film " + std::to_string(width) + "x" +
+                                std::to_string(height) + " or cell size " +
+                                std::to_string(cellSize) + " out of range");
+  }
+  cellsX_ = (width + cellSize - 1) / cellSize;
+  cellsY_ = (height + cellSize - 1) / cellSize;
+  const size_t cells = size_t(cellsX_) * cellsY_;
+  if (cells > kMaxCells) {
+    throw std::invalid_argument("pixel allocation: " + std::to_string(cells) +
+                                " cells, more than " + std::to_string(kMaxCells) +
+                                " (use larger cells)");
+  }
+  if (density.size() != cells || bidirectional.size() != cells) {
+    throw std::invalid_argument("pixel allocation: " + std::to_string(cells) + " cells, but " +
+                                std::to_string(density.size()) + " densities and " +
+                                std::to_string(bidirectional.size()) + " estimators");
+  }
+  for (size_t c = 0; c < cells; ++c) {
+    if (!std::isfinite(density[c]) || density[c] <= 0)
+      throw std::invalid_argument("pixel allocation: cell " + std::to_string(c) + " has density " +
+                                  std::to_string(density[c]) + " (must be finite and positive)");
+    if (bidirectional[c] > 1)
+      throw std::invalid_argument("pixel allocation: cell " + std::to_string(c) +
+                                  " names estimator " + std::to_string(bidirectional[c]));
+  }
+  density_ = std::move(density);
+  bidirectional_ = std::move(bidirectional);
+
+  // P_c = d_c a_c / sum d a, summed in double; (1) per cell.
+  cdf_.resize(cells);
+  cameraWeight_.resize(cells);
+  double total = 0, bidirectionalShare = 0;
+  for (int cy = 0; cy < cellsY_; ++cy) {
+    for (int cx = 0; cx < cellsX_; ++cx) {
+      const size_t c = size_t(cy) * cellsX_ + cx;
+      const double area = double(std::min(cellSize, width - cx * cellSize)) *
+                          std::min(cellSize, height - cy * cellSize);
+      total += double(density_[c]) * area;
+      cdf_[c] = total;
+      if (bidirectional_[c]) bidirectionalShare += double(density_[c]) * area;
+    }
+  }
+  const double filmArea = double(width) * height;
+  for (size_t c = 0; c < cells; ++c) {
+    cdf_[c] /= total;
+    cameraWeight_[c] = float(total / (filmArea * density_[c]));
+  }
+  cdf_.back() = 1;
+  lightTracingWeight_ = bidirectionalShare > 0 ? total / bidirectionalShare : 0;
+}
+
+PixelAllocation::FilmSample PixelAllocation::sampleFilm(float u0, float u1, float u2) const {
+  const size_t c =
+      std::min(size_t(std::upper_bound(cdf_.begin(), cdf_.end(), double(u0)) - cdf_.begin()),
+               cdf_.size() - 1);
+  const int cx = int(c % cellsX_), cy = int(c / cellsX_);
+  const int x0 = cx * cellSize_, y0 = cy * cellSize_;
+  const int w = std::min(cellSize_, width_ - x0), h = std::min(cellSize_, height_ - y0);
+  Vec2f film(float(x0) + u1 * float(w), float(y0) + u2 * float(h));
+  // Rounding must not carry a point out of its cell (its weight is the cell's).
+  film.x = std::min(film.x, std::nextafter(float(x0 + w), 0.0f));
+  film.y = std::min(film.y, std::nextafter(float(y0 + h), 0.0f));
+  return {film, cameraWeight_[c], bidirectional_[c] != 0};
+}
+
+int PixelAllocation::cellAt(const Vec2f& film) const {
+  const int x = std::clamp(int(std::floor(film.x)), 0, width_ - 1);
+  const int y = std::clamp(int(std::floor(film.y)), 0, height_ - 1);
+  return (y / cellSize_) * cellsX_ + x / cellSize_;
+}
+
+bool PixelAllocation::bidirectionalAt(const Vec2f& film) const {
+  return bidirectional_[size_t(cellAt(film))] != 0;
+}
+
+std::string PixelAllocation::encode() const {
+  std::string s;
+  appendBytes(s, kMagic);
+  appendBytes(s, kVersion);
+  appendBytes(s, int32_t(width_));
+  appendBytes(s, int32_t(height_));
+  appendBytes(s, int32_t(cellSize_));
+  for (float d : density_) appendBytes(s, d);
+  s.append(reinterpret_cast<const char*>(bidirectional_.data()), bidirectional_.size());
+  return s;
+}
+
+PixelAllocation PixelAllocation::decode(const std::string& bytes) {
+  size_t at = 0;
+  uint32_t magic = 0, version = 0;
+  int32_t width = 0, height = 0, cellSize = 0;
+  if (!readBytes(bytes, at, &magic) || magic != kMagic || !readBytes(bytes, at, &version) ||
+      version != kVersion || !readBytes(bytes, at, &width) || !readBytes(bytes, at, &height) ||
+      !readBytes(bytes, at, &cellSize)) {
+    throw std::invalid_argument("pixel allocation: not a pixel allocation of version 1");
+  }
+  if (width <= 0 || height <= 0 || width > kMaxSide || height > kMaxSide || cellSize <= 0 ||
+      cellSize > kMaxSide) {
+    throw std::invalid_argument("pixel allocation: film or cell size out of range");
+  }
+  const size_t cells =
+      size_t((width + cellSize - 1) / cellSize) * size_t((height + cellSize - 1) / cellSize);
+  if (cells > kMaxCells || bytes.size() - at != cells * (sizeof(float) + 1))
+    throw std::invalid_argument("pixel allocation: " + std::to_string(bytes.size()) +
+                                " bytes do not hold " + std::to_string(cells) + " cells");
+  std::vector<float> density(cells);
+  for (float& d : density) readBytes(bytes, at, &d);
+  std::vector<uint8_t> bidirectional(bytes.begin() + std::ptrdiff_t(at), bytes.end());
+  return PixelAllocation(width, height, cellSize, std::move(density), std::move(bidirectional));
+}
+
+}  // namespace farm

@@ -1,0 +1,147 @@
+#include "common/film/pixel_allocation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace farm {
+namespace {
+
+// A 5x3 film in cells of 2: 3x2 cells, the right column one pixel wide, the bottom row one
+// pixel high (areas 4 4 2 / 2 2 1, 15 pixels in all).
+PixelAllocation clipped() {
+  return PixelAllocation(5, 3, 2, {1, 2, 4, 0.5f, 1, 3}, {0, 1, 0, 1, 1, 0});
+}
+
+TEST(PixelAllocation, WeightsAreTheUniformFilmsDensityOverTheCells) {
+  const PixelAllocation a = clipped();
+  EXPECT_EQ(a.cellsX(), 3);
+  EXPECT_EQ(a.cellsY(), 2);
+  // sum d a = 1*4 + 2*4 + 4*2 + 0.5*2 + 1*2 + 3*1 = 26; weight of a cell 26 / (15 d), (1)
+  const double total = 26, film = 15;
+  const float d[] = {1, 2, 4, 0.5f, 1, 3};
+  const int x0[] = {0, 2, 4, 0, 2, 4}, y0[] = {0, 0, 0, 2, 2, 2};
+  for (int c = 0; c < 6; ++c) {
+    // The middle of cell c: u0 between its cumulative probabilities.
+    double before = 0;
+    const double area[] = {4, 4, 2, 2, 2, 1};
+    for (int k = 0; k < c; ++k) before += d[k] * area[k] / total;
+    const double mid = before + 0.5 * d[c] * area[c] / total;
+    const auto s = a.sampleFilm(float(mid), 0.5f, 0.5f);
+    EXPECT_NEAR(s.cameraWeight, total / (film * d[c]), 1e-5) << c;
+    EXPECT_GE(s.film.x, float(x0[c])) << c;
+    EXPECT_GE(s.film.y, float(y0[c])) << c;
+    EXPECT_EQ(s.bidirectional, a.bidirectional()[size_t(c)] != 0) << c;
+  }
+  // F_B = (2*4 + 0.5*2 + 1*2) / 26
+  EXPECT_NEAR(a.lightTracingWeight(), 26.0 / 11.0, 1e-12);
+}
+
+// Drawn many times, each cell is picked with probability d_c a_c / sum d a and its points stay
+// inside it; the camera weight averages to one over the draws (the uniform film's density over
+// the allocation's), which is what keeps a camera estimate unbiased.
+TEST(PixelAllocation, DrawsCellsInProportionToDensityTimesArea) {
+  const PixelAllocation a = clipped();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const int n = 200000;
+  std::vector<int> count(6, 0);
+  double weightSum = 0;
+  for (int i = 0; i < n; ++i) {
+    const auto s = a.sampleFilm(u(rng), u(rng), u(rng));
+    ASSERT_LT(s.film.x, 5.0f);
+    ASSERT_LT(s.film.y, 3.0f);
+    const int c = (int(s.film.y) / 2) * 3 + int(s.film.x) / 2;
+    ++count[size_t(c)];
+    weightSum += s.cameraWeight;
+    ASSERT_EQ(s.bidirectional, a.bidirectionalAt(s.film));
+  }
+  const double p[] = {4 / 26.0, 8 / 26.0, 8 / 26.0, 1 / 26.0, 2 / 26.0, 3 / 26.0};
+  for (int c = 0; c < 6; ++c) {
+    const double se = std::sqrt(n * p[c] * (1 - p[c]));
+    EXPECT_NEAR(count[size_t(c)], n * p[c], 4 * se) << c;
+  }
+  // E[weight] = sum_c P_c a_c / (A P_c) = 1; its spread over draws is below 2 here.
+  EXPECT_NEAR(weightSum / n, 1.0, 4 * 2 / std::sqrt(double(n)));
+}
+
+TEST(PixelAllocation, EdgesOfTheUnitIntervalStayOnTheFilm) {
+  const PixelAllocation a = clipped();
+  const float one = std::nextafter(1.0f, 0.0f);
+  for (float u0 : {0.0f, one}) {
+    for (float u : {0.0f, one}) {
+      const auto s = a.sampleFilm(u0, u, u);
+      EXPECT_GE(s.film.x, 0.0f);
+      EXPECT_LT(s.film.x, 5.0f);
+      EXPECT_LT(s.film.y, 3.0f);
+    }
+  }
+  // The last cell (1x1 at 4,2) keeps its points in itself up to rounding.
+  const auto last = a.sampleFilm(one, one, one);
+  EXPECT_GE(last.film.x, 4.0f);
+  EXPECT_GE(last.film.y, 2.0f);
+}
+
+TEST(PixelAllocation, CellSizeKeepsTheCellCountBounded) {
+  EXPECT_EQ(PixelAllocation::cellSizeFor(64, 64, 16384), 1);
+  EXPECT_EQ(PixelAllocation::cellSizeFor(256, 256, 16384), 2);
+  const int s = PixelAllocation::cellSizeFor(3840, 2160, 16384);
+  EXPECT_LE(((3840 + s - 1) / s) * ((2160 + s - 1) / s), 16384);
+  EXPECT_GT(((3840 + s - 2) / (s - 1)) * ((2160 + s - 2) / (s - 1)), 16384);
+}
+
+TEST(PixelAllocation, ByteFormRoundTripsAndRejectsWhatIsNotOne) {
+  const PixelAllocation a = clipped();
+  const PixelAllocation b = PixelAllocation::decode(a.encode());
+  EXPECT_EQ(b.width(), 5);
+  EXPECT_EQ(b.height(), 3);
+  EXPECT_EQ(b.cellSize(), 2);
+  EXPECT_EQ(b.density(), a.density());
+  EXPECT_EQ(b.bidirectional(), a.bidirectional());
+
+  const std::string bytes = a.encode();
+  auto rejects = [](const std::string& form, const std::string& what) {
+    try {
+      PixelAllocation::decode(form);
+      ADD_FAILURE() << "accepted: " << what;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("pixel allocation"), std::string::npos) << e.what();
+    }
+  };
+  rejects("", "nothing");
+  rejects(bytes.substr(0, bytes.size() - 1), "a cell short");
+  rejects(bytes + "x", "a byte over");
+  std::string wrongMagic = bytes;
+  wrongMagic[0] ^= 1;
+  rejects(wrongMagic, "another magic");
+  std::string nanDensity = bytes;
+  const float nan = std::nanf("");
+  std::memcpy(&nanDensity[20], &nan, sizeof(float));  // the first density
+  rejects(nanDensity, "a NaN density");
+  std::string badEstimator = bytes;
+  badEstimator.back() = 2;
+  rejects(badEstimator, "estimator 2");
+  std::string hugeFilm = bytes;
+  const int32_t huge = 1 << 30;
+  std::memcpy(&hugeFilm[8], &huge, sizeof(huge));
+  rejects(hugeFilm, "a film of 2^30 pixels a side");
+}
+
+TEST(PixelAllocation, ConstructorNamesWhatIsWrong) {
+  EXPECT_THROW(PixelAllocation(4, 4, 2, {1, 1, 1}, {0, 0, 0}), std::invalid_argument);
+  EXPECT_THROW(PixelAllocation(4, 4, 2, {1, 1, 1, 0}, {0, 0, 0, 0}), std::invalid_argument);
+  EXPECT_THROW(PixelAllocation(4, 4, 2, {1, 1, 1, -1}, {0, 0, 0, 0}), std::invalid_argument);
+  EXPECT_THROW(PixelAllocation(4, 4, 2, {1, 1, 1, HUGE_VALF}, {0, 0, 0, 0}), std::invalid_argument);
+  EXPECT_THROW(PixelAllocation(0, 4, 2, {}, {}), std::invalid_argument);
+  EXPECT_THROW(PixelAllocation(4, 4, 0, {1}, {0}), std::invalid_argument);
+  // No bidirectional cell: light tracing never counts.
+  EXPECT_EQ(PixelAllocation(4, 4, 2, {1, 1, 1, 1}, {0, 0, 0, 0}).lightTracingWeight(), 0);
+}
+
+}  // namespace
+}  // namespace farm
