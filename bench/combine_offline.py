@@ -12,7 +12,7 @@ an unbiased estimator falls as 1/time; the chains' start-up error makes this a l
 them). Every error has the reference's own relative MSE taken off, as in corpus_table.py.
 
     bench/combine_offline.py CORPUS OUT [--half measure|tune|all] [--algorithms pt,bdpt,pssmlt,mmlt]
-                             [--seeds 1 2 3] [--only a,b]
+                             [--seeds 101 102 103] [--only a,b]
 
 Prints a table: each scene's best single algorithm and its relative MSE, and each pair's
 combination as a ratio to it (under 1: the combination wins at equal time).
@@ -51,7 +51,7 @@ def box(v, radius=2):
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_corpus_arguments(parser, half="measure", seeds=[1, 2, 3], farm=False)
+    add_corpus_arguments(parser, half="measure", seeds=[101, 102, 103], farm=False)
     parser.add_argument("--algorithms", default="pt,bdpt,pssmlt,mmlt")
     args = parser.parse_args()
     if len(args.seeds) < 3:

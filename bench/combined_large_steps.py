@@ -6,7 +6,7 @@ bench/corpus_table.py does) and the largest channel-mean deviation, per scene, a
 seed, then the ratio combined / alone of the means over the seeds, and their geometric mean per
 half and algorithm.
 
-    bench/combined_large_steps.py CORPUS OUT [--half all] [--only NAME,...] [--seeds 1 2]
+    bench/combined_large_steps.py CORPUS OUT [--half all] [--only NAME,...] [--seeds 101 102]
                                   [--algorithms pssmlt,mmlt] [--time 10] [--table-only]
 
 A scene takes algorithms x 2 x seeds x time seconds. Run it alone: timings beside a build are
@@ -56,7 +56,7 @@ def deviation(args, s, render_dir):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    add_corpus_arguments(parser, half="all", seeds=[1, 2])
+    add_corpus_arguments(parser, half="all", seeds=[101, 102])
     parser.add_argument("--algorithms", default="pssmlt,mmlt")
     parser.add_argument("--time", type=float, default=10)
     args = parser.parse_args()

@@ -15,7 +15,7 @@ scene's renders in the run (relative MSE falls as 1 / samples): the machine's sp
 tens of percent between renders of one sitting, and this takes that scatter out of the ratios,
 leaving the pick, the pilot's share of the budget and the renders' own noise.
 
-    bench/corpus_table.py CORPUS OUT [--half measure|tune|all] [--times 10 30] [--seeds 1 2 3]
+    bench/corpus_table.py CORPUS OUT [--half measure|tune|all] [--times 10 30] [--seeds 101 102 103]
                           [--algorithms pt,bdpt,pssmlt,mmlt,mlt] [--size 64] [--table-only] [--no-auto]
 
 A scene takes (algorithms x longest + sum of times) x seeds seconds: at the defaults 13 scenes
@@ -52,7 +52,7 @@ def run(command, log):
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_corpus_arguments(parser, half="measure", seeds=[1, 2, 3])
+    add_corpus_arguments(parser, half="measure", seeds=[101, 102, 103])
     parser.add_argument("--times", type=float, nargs="+", default=[10, 30])
     parser.add_argument("--algorithms", default="pt,bdpt,pssmlt,mmlt,mlt")
     parser.add_argument("--auto-only", action="store_true",

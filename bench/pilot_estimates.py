@@ -9,7 +9,7 @@ an algorithm that would have won).
 Writes OUT/<scene>/<algorithm>-seed-<n>/ and OUT/estimates.md.
 
     bench/pilot_estimates.py CORPUS OUT [--half tune|measure|all] [--algorithms pt,bdpt,pssmlt]
-                             [--seconds 1] [--seeds 1 2 3] [--size 64] [--farm build/bin/farm]
+                             [--seconds 1] [--seeds 101 102 103] [--size 64] [--farm build/bin/farm]
                              [--only a,b] [--table-only]
 """
 import argparse
@@ -24,7 +24,7 @@ from corpus_common import (add_corpus_arguments, corpus_scenes, geometric_mean, 
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_corpus_arguments(parser, half="tune", seeds=[1, 2, 3])
+    add_corpus_arguments(parser, half="tune", seeds=[101, 102, 103])
     parser.add_argument("--algorithms", default="pt,bdpt,pssmlt")
     parser.add_argument("--seconds", type=float, default=1)
     args = parser.parse_args()

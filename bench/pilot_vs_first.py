@@ -7,7 +7,7 @@ the pilot cost more than its picks saved.
 
 Writes OUT/<scene>/seed-<n>/{pilot,first}/ and OUT/pilot_vs_first.md.
 
-    bench/pilot_vs_first.py CORPUS OUT [--half tune|measure|all] [--seconds 30] [--seeds 1 2]
+    bench/pilot_vs_first.py CORPUS OUT [--half tune|measure|all] [--seconds 30] [--seeds 101 102]
                             [--size 64] [--farm build/bin/farm] [--only a,b] [--table-only]
 """
 import argparse
@@ -23,7 +23,7 @@ from corpus_common import (add_corpus_arguments, corpus_scenes, reference_floor,
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_corpus_arguments(parser, half="tune", seeds=[1, 2])
+    add_corpus_arguments(parser, half="tune", seeds=[101, 102])
     parser.add_argument("--seconds", type=float, default=30)
     args = parser.parse_args()
     scenes = corpus_scenes(args)

@@ -438,6 +438,8 @@ TEST(EmbeddedRender, PixelAllocationReachesTheWorkers) {
   const LocalRenderResult here =
       renderLocally(RenderJob(loadScene(kScene, settings), settings, "here"));
   ASSERT_NO_FATAL_FAILURE(expectSameImage(farm.image, here.image, Algorithm::Bidirectional));
+  EXPECT_EQ(farm.metadata.at("farm:pixelAllocation"),
+            "6x6 cells of 4 pixels, 12 bidirectional, densities 1 to 4");
   o.settings.pixelAllocation.reset();
   s = renderEmbedded(o, &uniform);
   ASSERT_TRUE(s.isOk()) << s.message();

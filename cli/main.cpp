@@ -89,8 +89,8 @@ void addRenderOptions(CLI::App* command, RenderOptions* o) {
                    "MLT with Veach's mutations), erpt (energy redistribution path tracing), "
                    "auto (the scene's plan picks one, its first candidate: `farm plan SCENE` "
                    "shows how and why; with --pilot a short render of each candidate ranks "
-                   "them; within 1.2x of the best on the corpus's measuring half, "
-                   "docs/corpus.md)")
+                   "them; where the pick is bdpt and --time is given, a pilot of a tenth of it "
+                   "places bdpt's samples where its error is; docs/corpus.md)")
       ->default_str("auto");
   command->add_option("--spp", o->spp, "samples per pixel (pt, bdpt), seeds per pixel (erpt)")
       ->default_str("16");

@@ -123,7 +123,8 @@ def reference_for(farm, entry, corpus, seconds, seeds, size, reuse):
     save(os.path.join(scene_dir, "reference.exr"), reference)
     result = {
         "name": entry["name"], "family": entry["family"], "half": entry["half"],
-        "size": size, "seconds_each": seconds, "seeds": seeds, "seconds_spent": round(spent, 1),
+        "size": size, "seconds_each": seconds, "seeds": seeds,
+        "seed_list": list(range(1, seeds + 1)), "seconds_spent": round(spent, 1),
         "weights": weight,
         "estimated_relmse": error,
         "reference_relmse": float(np.mean(reference_var / (reference ** 2 + 0.01))),

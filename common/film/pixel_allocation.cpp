@@ -28,6 +28,73 @@ int PixelAllocation::cellSizeFor(int width, int height, int maxCells) {
   return size;
 }
 
+PixelAllocation PixelAllocation::byError(const std::vector<Image>& groups, bool bidirectional,
+                                         int radius, double floor, int maxCells) {
+  if (groups.size() < 2)
+    throw std::invalid_argument("pixel allocation: the pilot needs two images or more");
+  const int width = groups[0].width, height = groups[0].height;
+  for (const Image& g : groups) {
+    if (g.width != width || g.height != height || g.rgb.size() != size_t(width) * height * 3)
+      throw std::invalid_argument("pixel allocation: the pilot's images differ in size");
+  }
+  const size_t pixels = size_t(width) * height;
+  const double n = double(groups.size());
+  std::vector<double> error(pixels, 0.0);
+  for (size_t p = 0; p < pixels; ++p) {
+    for (int c = 0; c < 3; ++c) {
+      double sum = 0, sumSquares = 0;
+      for (const Image& g : groups) {
+        const double v = g.rgb[3 * p + size_t(c)];
+        sum += v;
+        sumSquares += v * v;
+      }
+      const double mean = sum / n;
+      // The variance of the G images' mean: their spread over G (G - 1).
+      const double variance = std::max(0.0, sumSquares - n * mean * mean) / (n * (n - 1));
+      error[p] += variance / (mean * mean + 0.01) / 3;
+    }
+    if (!std::isfinite(error[p])) error[p] = 0;
+  }
+  // The box average, separable: along rows (a step of 1 between neighbours, `width` of them a
+  // line), then along columns (a step of `width`, `height` of them a line).
+  const auto boxPass = [&](const std::vector<double>& in, size_t step, int length) {
+    std::vector<double> out(pixels, 0.0);
+    for (size_t p = 0; p < pixels; ++p) {
+      const int at = int(step == 1 ? p % size_t(width) : p / size_t(width));
+      const int from = std::max(0, at - radius), to = std::min(length - 1, at + radius);
+      double sum = 0;
+      for (int k = from; k <= to; ++k) sum += in[p + (ptrdiff_t(k) - at) * ptrdiff_t(step)];
+      out[p] = sum / double(to - from + 1);
+    }
+    return out;
+  };
+  const std::vector<double> smooth = boxPass(boxPass(error, 1, width), size_t(width), height);
+  double mean = 0;
+  for (double e : smooth) mean += e / double(pixels);
+  const double least = mean > 0 ? floor * mean : 1;
+  const int size = cellSizeFor(width, height, maxCells);
+  const int cellsX = (width + size - 1) / size, cellsY = (height + size - 1) / size;
+  std::vector<double> cellDensity(size_t(cellsX) * cellsY, 0.0);
+  std::vector<int> cellPixels(cellDensity.size(), 0);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const size_t c = size_t(y / size) * cellsX + x / size;
+      cellDensity[c] += std::sqrt(std::max(smooth[size_t(y) * width + x], least));
+      ++cellPixels[c];
+    }
+  }
+  double total = 0;
+  for (size_t c = 0; c < cellDensity.size(); ++c) {
+    cellDensity[c] /= cellPixels[c];
+    total += cellDensity[c];
+  }
+  std::vector<float> density(cellDensity.size());
+  for (size_t c = 0; c < density.size(); ++c)
+    density[c] = float(cellDensity[c] * double(density.size()) / total);
+  return PixelAllocation(width, height, size, std::move(density),
+                         std::vector<uint8_t>(cellDensity.size(), bidirectional ? 1 : 0));
+}
+
 PixelAllocation::PixelAllocation(int width, int height, int cellSize, std::vector<float> density,
                                  std::vector<uint8_t> bidirectional)
     : width_(width), height_(height), cellSize_(cellSize) {

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/film/image.h"
 #include "common/math/vec.h"
 
 namespace farm {
@@ -41,6 +42,19 @@ class PixelAllocation {
 
   // The cell size that keeps a film of width x height within maxCells cells.
   static int cellSizeFor(int width, int height, int maxCells);
+
+  // One estimator everywhere (bidirectional or not), its samples where a pilot saw its error:
+  // from G >= 2 independent images of the pilot (its chain groups), each pixel's relative error
+  // e_p (the variance of their mean over (m^2 + 0.01), m that mean, the channels averaged: the
+  // relative MSE's terms, common/film/error_metrics.h) averaged over a (2 radius + 1)^2 box
+  // (one pixel's spread over G images is mostly noise), floored at `floor` times its mean over
+  // the film (no pixel starves on the pilot's word), and the density n_p ~ sqrt(e_p): the one
+  // that minimizes the mean of e_p n_pilot / n_p for a fixed total of samples of equal cost
+  // (Lagrange). Cells of cellSizeFor(width, height, maxCells) take their pixels' mean density.
+  // The job's image stays unbiased whatever the pilot saw; the pilot's samples must come from
+  // other random numbers than the job's (its densities would follow the job's own noise).
+  static PixelAllocation byError(const std::vector<Image>& groups, bool bidirectional,
+                                 int radius = 2, double floor = 0.01, int maxCells = 16384);
 
   struct FilmSample {
     Vec2f film;          // pixels

@@ -143,5 +143,63 @@ TEST(PixelAllocation, ConstructorNamesWhatIsWrong) {
   EXPECT_EQ(PixelAllocation(4, 4, 2, {1, 1, 1, 1}, {0, 0, 0, 0}).lightTracingWeight(), 0);
 }
 
+// A pilot's groups that differ on the left half of the film only: the samples go there in
+// proportion to the square root of the relative error, the right half (no spread) keeps the
+// floor's share, and the estimator is the one asked for.
+TEST(PixelAllocation, ByErrorPutsTheSamplesWhereThePilotsGroupsDisagree) {
+  const int w = 16, h = 8;
+  std::vector<Image> groups(4, Image(w, h));
+  for (size_t g = 0; g < groups.size(); ++g) {
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        // left: mean 1, spread growing to the left edge; right: 1 in every group
+        const float spread = x < w / 2 ? 0.1f * float(w / 2 - x) : 0.0f;
+        const float v = 1.0f + (g % 2 ? spread : -spread);
+        groups[g].set(x, y, Spectrum(v, v, v));
+      }
+    }
+  }
+  const PixelAllocation a = PixelAllocation::byError(groups, true, 0, 0.01);
+  EXPECT_EQ(a.cellSize(), 1);
+  EXPECT_EQ(a.bidirectional(), std::vector<uint8_t>(size_t(w * h), 1));
+  const std::vector<float>& d = a.density();
+  double mean = 0;
+  for (float v : d) mean += v / double(d.size());
+  EXPECT_NEAR(mean, 1.0, 1e-5);
+  // Variance of the mean of four: spread^2 * 4 / 12; relative over (1 + 0.01); density sqrt.
+  auto error = [](double spread) { return spread * spread / 3 / 1.01; };
+  double mean_error = 0;
+  for (int x = 0; x < w / 2; ++x) mean_error += error(0.1 * (w / 2 - x)) / w;
+  for (int x = 0; x < w / 2; ++x) {
+    EXPECT_NEAR(d[size_t(x)] / d[size_t(x + 1)],
+                std::sqrt(error(0.1 * (w / 2 - x)) /
+                          std::max(error(0.1 * (w / 2 - x - 1)), 0.01 * mean_error)),
+                1e-4)
+        << x;
+  }
+  EXPECT_NEAR(d[size_t(w - 1)] / d[0], std::sqrt(0.01 * mean_error / error(0.1 * w / 2)), 1e-4);
+  EXPECT_EQ(d[size_t(w - 1)], d[size_t(w / 2 + 1)]) << "the floor, alike on the right";
+  EXPECT_EQ(PixelAllocation::byError(groups, false, 2).bidirectional(),
+            std::vector<uint8_t>(size_t(w * h), 0));
+  // Cells: the mean of their pixels' densities.
+  const PixelAllocation coarse = PixelAllocation::byError(groups, true, 0, 0.01, 32);
+  EXPECT_EQ(coarse.cellSize(), 2);
+  EXPECT_THROW(PixelAllocation::byError({groups[0]}, true), std::invalid_argument);
+
+  // The box: one pixel's spread reaches its 3x3 neighbourhood at radius 1, and no further.
+  std::vector<Image> spike(2, Image(w, h));
+  spike[0].set(5, 3, Spectrum(2, 2, 2));
+  const PixelAllocation boxed = PixelAllocation::byError(spike, true, 1, 0.01);
+  const std::vector<float>& b = boxed.density();
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const bool near = std::abs(x - 5) <= 1 && std::abs(y - 3) <= 1;
+      const float corner = b[size_t(2 * w + 4)];
+      EXPECT_EQ(b[size_t(y * w + x)], near ? corner : b[0]) << x << "," << y;
+    }
+  }
+  EXPECT_GT(b[size_t(2 * w + 4)], 5 * b[0]);
+}
+
 }  // namespace
 }  // namespace farm

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -29,9 +30,11 @@ double since(Clock::time_point t) {
 constexpr int kPilotGroups = 4;
 constexpr int kPilotMaxChains = 64;
 
-// *image: the candidate's image, for the cross estimate (runPilot).
+// *image: the candidate's image, for the cross estimate (runPilot); *groupImages, when given,
+// each chain group's (for a pixel allocation).
 PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings, double seconds,
-                     const std::function<bool()>& keepGoing, Image* image) {
+                     const std::function<bool()>& keepGoing, Image* image,
+                     std::vector<Image>* groupImages = nullptr) {
   PilotFigure figure;
   figure.algorithm = settings.algorithm;
   settings.autoAlgorithm = false;
@@ -105,6 +108,7 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
       throw std::runtime_error(error);
     figure.estimatedRelMse = estimate.relMse;
     figure.score = estimate.relMse * figure.seconds;
+    if (groupImages) *groupImages = std::move(images);
   } catch (const std::exception& e) {
     figure.estimatedRelMse = -1;
     figure.score = -1;
@@ -160,6 +164,43 @@ std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
   return figures;
 }
 
+double allocationPilotSeconds(const RenderSettings& settings) {
+  if (settings.timeBudgetSeconds <= 0) return 0;
+  const double seconds = kAllocationShare * settings.timeBudgetSeconds;
+  return seconds < kAllocationMinSeconds ? 0.0 : std::min(seconds, kPilotMaxSeconds);
+}
+
+std::shared_ptr<const PixelAllocation> allocationPilot(std::shared_ptr<const Scene> scene,
+                                                       RenderSettings settings, double seconds,
+                                                       const std::function<bool()>& keepGoing,
+                                                       std::string* why) {
+  if (settings.algorithm != Algorithm::PathTracing &&
+      settings.algorithm != Algorithm::Bidirectional) {
+    throw std::invalid_argument("a pixel allocation places independent samples: pt or bdpt");
+  }
+  // Other random numbers than the job's: sample k of the job is stream (seed, k), and a
+  // pilot of the same seed would be the job's first samples, its densities following their noise.
+  settings.seed = settings.seed ^ kAllocationSeedSalt;
+  settings.pixelAllocation.reset();
+  Image image;
+  std::vector<Image> groups;
+  const PilotFigure figure = pilotOne(scene, settings, seconds, keepGoing, &image, &groups);
+  if (figure.score < 0 || groups.size() < 2) {
+    *why = "no pixel allocation: its pilot failed (" + figure.failure + ")";
+    return nullptr;
+  }
+  auto allocation = std::make_shared<const PixelAllocation>(
+      PixelAllocation::byError(groups, settings.algorithm == Algorithm::Bidirectional));
+  const auto [lo, hi] =
+      std::minmax_element(allocation->density().begin(), allocation->density().end());
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "a pilot of %.1f s placed the samples by its error (densities %.2g to %.2g)",
+                figure.seconds, double(*lo), double(*hi));
+  *why = text;
+  return allocation;
+}
+
 Algorithm pilotPick(Algorithm first, const std::vector<PilotFigure>& figures) {
   double firstScore = -1;
   for (const PilotFigure& f : figures)
@@ -211,6 +252,17 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
     settings->algorithm = plan.algorithm;
     settings->autoAlgorithm = false;
     settings->pilot = false;
+    // Bidirectional path tracing's samples where its error is (docs/corpus.md, "Per-pixel
+    // estimators and sample density"): with a time budget only, so that a job of counts keeps
+    // its seed's image.
+    if (settings->algorithm == Algorithm::Bidirectional && !settings->pixelAllocation) {
+      if (const double seconds = allocationPilotSeconds(*settings); seconds > 0) {
+        std::string why;
+        settings->pixelAllocation = allocationPilot(scene, *settings, seconds, keepGoing, &why);
+        if (keepGoing && !keepGoing()) throw std::runtime_error("cancelled");
+        plan.why += "; " + why;
+      }
+    }
   }
   if (settings->ignorePlan) {
     plan.applied = false;

@@ -11,8 +11,10 @@
 // is left out of the product: in the job it is a few percent (common/mcmc/bootstrap_size.h), in a
 // pilot of a second it can be most of it.
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "common/plan/render_plan.h"
@@ -46,6 +48,27 @@ std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
                                   const RenderSettings& settings,
                                   const std::vector<Algorithm>& candidates, double seconds,
                                   const std::function<bool()>& keepGoing = {});
+
+// --algorithm auto, where the plan picks bdpt and the job has a time budget: a pilot of
+// kAllocationShare of the budget (at least kAllocationMinSeconds, at most kPilotMaxSeconds)
+// renders the job's algorithm under another seed, and its chain groups' spread places the job's
+// samples (PixelAllocation::byError). Measured on corpus scenes of both halves, bdpt's error
+// fell where its error is uneven over the image and stayed where it is not; pt's hardly moved,
+// so pt keeps uniform sampling (docs/corpus.md, "Per-pixel estimators and sample density").
+constexpr double kAllocationShare = 0.1;
+constexpr double kAllocationMinSeconds = 0.5;
+constexpr uint64_t kAllocationSeedSalt = 0x6a09e667f3bcc909ull;
+
+// The allocation pilot's seconds for these settings; 0: none.
+double allocationPilotSeconds(const RenderSettings& settings);
+
+// Renders settings.algorithm (pt or bdpt) for `seconds` under a seed of its own and returns the
+// allocation its error asks for, with *why saying what it did; nullptr (and *why saying so)
+// when the pilot failed.
+std::shared_ptr<const PixelAllocation> allocationPilot(std::shared_ptr<const Scene> scene,
+                                                       RenderSettings settings, double seconds,
+                                                       const std::function<bool()>& keepGoing,
+                                                       std::string* why);
 
 // What the pilot's figures (best score first) pick: the plan's first candidate, unless it
 // failed or another's score is under its own over kPilotMargin.

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <vector>
 
 #include "common/render/local_render.h"
 #include "common/scene/scene.h"
@@ -206,6 +208,42 @@ TEST(PlanJob, ThePilotOverrulesTheFirstCandidateOnlyByAMargin) {
   failed.failure = "no light";
   EXPECT_EQ(pilotPick(bdpt, {figure(pt, 0.9), failed}), pt) << "the first failed";
   EXPECT_EQ(pilotPick(bdpt, {}), bdpt);
+}
+
+// Where auto renders bdpt with a time budget, a pilot of a tenth of it places the samples by
+// bdpt's error (PixelAllocation::byError), and the plan says so; a job of counts keeps uniform
+// sampling (its seed's image stays the same), as does a budget too short for a pilot.
+TEST(PlanJob, AutoPlacesBidirectionalSamplesByAPilotsError) {
+  // A box of smoke, which the plan renders with bdpt.
+  std::shared_ptr<Scene> scene = load(std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml", 32);
+  RenderSettings settings;
+  settings.autoAlgorithm = true;
+  settings.width = settings.height = 32;
+  settings.timeBudgetSeconds = 6;
+  const RenderPlan plan = planJob(scene, &settings);
+  ASSERT_EQ(settings.algorithm, Algorithm::Bidirectional) << plan.why;
+  ASSERT_TRUE(settings.pixelAllocation);
+  EXPECT_EQ(settings.pixelAllocation->width(), 32);
+  EXPECT_EQ(settings.pixelAllocation->bidirectional(), std::vector<uint8_t>(32 * 32, 1));
+  const auto [lo, hi] = std::minmax_element(settings.pixelAllocation->density().begin(),
+                                            settings.pixelAllocation->density().end());
+  EXPECT_GT(*hi / *lo, 2.0f) << "the light and the smoke are not alike";
+  EXPECT_NE(plan.why.find("s placed the samples by its error (densities "), std::string::npos)
+      << plan.why;
+  EXPECT_TRUE(settings.validate().empty()) << settings.validate();
+
+  RenderSettings counts;
+  counts.autoAlgorithm = true;
+  counts.width = counts.height = 32;
+  planJob(scene, &counts);
+  EXPECT_EQ(counts.algorithm, Algorithm::Bidirectional);
+  EXPECT_FALSE(counts.pixelAllocation);
+  RenderSettings brief = counts;
+  brief.autoAlgorithm = true;
+  brief.timeBudgetSeconds = 4;  // 0.4 s, under kAllocationMinSeconds
+  planJob(scene, &brief);
+  EXPECT_FALSE(brief.pixelAllocation);
+  EXPECT_DOUBLE_EQ(allocationPilotSeconds(settings), 0.6);
 }
 
 TEST(PlanJob, PilotSecondsAreAShareOfTheBudget) {

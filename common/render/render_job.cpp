@@ -463,6 +463,15 @@ ImageMetadata RenderJob::metadata(const BootstrapResult& bootstrap, int64_t work
   } else {
     m["farm:samples"] = std::to_string(workDone);
     m["farm:samplesPerPixel"] = formatDouble(workDone / pixels);
+    if (const PixelAllocation* a = settings_.pixelAllocation.get()) {
+      size_t bidirectional = 0;
+      for (uint8_t b : a->bidirectional()) bidirectional += b;
+      const auto [lo, hi] = std::minmax_element(a->density().begin(), a->density().end());
+      m["farm:pixelAllocation"] = std::to_string(a->cellsX()) + "x" + std::to_string(a->cellsY()) +
+                                  " cells of " + std::to_string(a->cellSize()) + " pixels, " +
+                                  std::to_string(bidirectional) + " bidirectional, densities " +
+                                  formatDouble(*lo) + " to " + formatDouble(*hi);
+    }
   }
   const bool pathSpace =
       settings_.algorithm == Algorithm::MLT || settings_.algorithm == Algorithm::ERPT;
