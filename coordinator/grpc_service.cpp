@@ -437,6 +437,8 @@ class WorkerService final : public v1::WorkerApi::Service {
       lease->set_bundle_hash(w.bundleHash);
       lease->set_scene_path(w.bundleScenePath);
       *lease->mutable_settings() = farm::toProto(w.settings);
+      // The work unit carries the pixel allocation; a second copy would only fill the message.
+      lease->mutable_settings()->clear_pixel_allocation();
     }
     if (leases.empty()) response->set_retry_after_ms(500);
     return grpc::Status::OK;

@@ -231,3 +231,41 @@ TEST(StoreRecords, CheckpointsOfTheOlderLayoutReadAsTheirSum) {
 
 }  // namespace
 }  // namespace farm
+
+namespace farm {
+namespace {
+
+// A plan whose bdpt samples a pilot placed comes back with its allocation, in the planned
+// settings and in every chain (a restarted coordinator resumes them as they were leased).
+TEST(StoreRecords, APlansPixelAllocationComesBack) {
+  auto allocation = std::make_shared<const PixelAllocation>(4, 2, 2, std::vector<float>{1, 3},
+                                                            std::vector<uint8_t>{1, 1});
+  JobPlan plan;
+  plan.width = 4;
+  plan.height = 2;
+  RenderSettings settings;
+  settings.algorithm = Algorithm::Bidirectional;
+  settings.pixelAllocation = allocation;
+  plan.plannedSettings = settings;
+  for (uint32_t c = 0; c < 2; ++c) {
+    ChainSpec spec;
+    spec.chainIndex = c;
+    spec.algorithm = Algorithm::Bidirectional;
+    spec.flushInterval = 64;
+    spec.pixelAllocation = allocation;
+    plan.chains.push_back(spec);
+  }
+  JobPlan back;
+  std::string error;
+  ASSERT_TRUE(store::decodePlan(store::encodePlan(plan), &back, &error)) << error;
+  ASSERT_TRUE(back.plannedSettings && back.plannedSettings->pixelAllocation);
+  EXPECT_EQ(back.plannedSettings->pixelAllocation->encode(), allocation->encode());
+  ASSERT_EQ(back.chains.size(), 2u);
+  for (const ChainSpec& c : back.chains) {
+    ASSERT_TRUE(c.pixelAllocation);
+    EXPECT_EQ(c.pixelAllocation->encode(), allocation->encode());
+  }
+}
+
+}  // namespace
+}  // namespace farm

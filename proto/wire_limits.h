@@ -10,8 +10,9 @@ namespace farm {
 // (ChainSpec.seen_emission_every), which a worker of 3 would drop and render the light twice;
 // 5: RenderSettings.shading_normals, which a worker of 4 would drop and render the scene's
 // convention where the job overrides it; 6: a single flush is a batch of one (FlushHeader holds
-// its entry in `entries`, where a worker of 5 sends it in the header's own fields)
-inline constexpr uint32_t kProtocolVersion = 6;
+// its entry in `entries`, where a worker of 5 sends it in the header's own fields); 7: pixel
+// allocations (ChainSpec.pixel_allocation), which a worker of 6 would drop and sample uniformly
+inline constexpr uint32_t kProtocolVersion = 7;
 
 // gRPC message size limit, set explicitly on servers and channels (the library default of 4 MiB
 // is implicit and asymmetric between send and receive).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 
 #include "common/math/bytes.h"
@@ -14,9 +15,9 @@ constexpr uint32_t kMagic = 0x41584950;  // "PIXA"
 constexpr uint32_t kVersion = 1;
 // A film of at most 2^16 pixels a side and cells of at most that: no product overflows.
 constexpr int kMaxSide = 1 << 16;
-// Every work unit carries the allocation: 5 bytes a cell, at most 5 MiB (a film of 1024x1024
-// pixels in cells of one; a 4K film in cells of 4).
-constexpr size_t kMaxCells = size_t(1) << 20;
+// Every work unit carries the allocation: 5 bytes a cell, at most 320 KiB (a 4K film in cells
+// of 16); kept well under the lease's message limit (proto/wire_limits.h).
+constexpr size_t kMaxCells = size_t(1) << 16;
 
 }  // namespace
 
@@ -128,27 +129,46 @@ PixelAllocation::PixelAllocation(int width, int height, int cellSize, std::vecto
   density_ = std::move(density);
   bidirectional_ = std::move(bidirectional);
 
-  // P_c = d_c a_c / sum d a, summed in double; (1) per cell.
-  cdf_.resize(cells);
-  cameraWeight_.resize(cells);
-  double total = 0, bidirectionalShare = 0;
+  // P_c = d_c a_c / sum d a, on the grid of 2^-24 that Rng::nextFloat draws u0 from: cell c
+  // is picked by the u0 in [cdf_{c-1}, cdf_c), exactly (cdf_c - cdf_{c-1}) 2^24 of the 2^24
+  // values, and its weights (1) and 1 / F_B use that probability, not the unrounded one (which
+  // would bias every sample of a cell by their ratio: 1% for a cell of a hundred grid points).
+  // Every cell keeps one grid point at least (kMaxCells is far below 2^24).
+  constexpr double kGrid = 16777216.0;  // 2^24
+  std::vector<double> area(cells);
+  double total = 0;
   for (int cy = 0; cy < cellsY_; ++cy) {
     for (int cx = 0; cx < cellsX_; ++cx) {
       const size_t c = size_t(cy) * cellsX_ + cx;
-      const double area = double(std::min(cellSize, width - cx * cellSize)) *
-                          std::min(cellSize, height - cy * cellSize);
-      total += double(density_[c]) * area;
-      cdf_[c] = total;
-      if (bidirectional_[c]) bidirectionalShare += double(density_[c]) * area;
+      area[c] = double(std::min(cellSize, width - cx * cellSize)) *
+                std::min(cellSize, height - cy * cellSize);
+      total += double(density_[c]) * area[c];
     }
   }
-  const double filmArea = double(width) * height;
+  std::vector<int64_t> grid(cells);
+  double sum = 0;
   for (size_t c = 0; c < cells; ++c) {
-    cdf_[c] /= total;
-    cameraWeight_[c] = float(total / (filmArea * density_[c]));
+    sum += double(density_[c]) * area[c];
+    grid[c] = int64_t(std::llround(sum / total * kGrid));
   }
-  cdf_.back() = 1;
-  lightTracingWeight_ = bidirectionalShare > 0 ? total / bidirectionalShare : 0;
+  const int64_t points = int64_t(kGrid);
+  for (size_t c = 0; c < cells; ++c) {  // one point at least, and room left for the rest
+    const int64_t least = (c == 0 ? 0 : grid[c - 1]) + 1;
+    const int64_t most = points - int64_t(cells - 1 - c);
+    grid[c] = std::clamp(grid[c], least, most);
+  }
+  grid.back() = points;
+  cdf_.resize(cells);
+  cameraWeight_.resize(cells);
+  const double filmArea = double(width) * height;
+  double bidirectionalShare = 0;
+  for (size_t c = 0; c < cells; ++c) {
+    const double probability = double(grid[c] - (c == 0 ? 0 : grid[c - 1])) / kGrid;
+    cdf_[c] = double(grid[c]) / kGrid;
+    cameraWeight_[c] = float(area[c] / (filmArea * probability));
+    if (bidirectional_[c]) bidirectionalShare += probability;
+  }
+  lightTracingWeight_ = bidirectionalShare > 0 ? 1 / bidirectionalShare : 0;
 }
 
 PixelAllocation::FilmSample PixelAllocation::sampleFilm(float u0, float u1, float u2) const {

@@ -54,14 +54,15 @@ class PixelAllocation {
   // The job's image stays unbiased whatever the pilot saw; the pilot's samples must come from
   // other random numbers than the job's (its densities would follow the job's own noise).
   static PixelAllocation byError(const std::vector<Image>& groups, bool bidirectional,
-                                 int radius = 2, double floor = 0.01, int maxCells = 16384);
+                                 int radius = 2, double floor = 0.01, int maxCells = 4096);
 
   struct FilmSample {
     Vec2f film;          // pixels
     float cameraWeight;  // (1): the weight of this sample's camera-side contributions
     bool bidirectional;  // the cell's estimator
   };
-  // A film point from three uniform numbers in [0, 1).
+  // A film point from three uniform numbers in [0, 1); u0, which picks the cell, on the grid
+  // of 2^-24 (Rng::nextFloat's), for which the weights are exact.
   FilmSample sampleFilm(float u0, float u1, float u2) const;
 
   // 1 / F_B: the weight of a light-tracing splat that lands in a bidirectional cell (0 when

@@ -38,8 +38,8 @@ TEST(PixelAllocation, WeightsAreTheUniformFilmsDensityOverTheCells) {
     EXPECT_GE(s.film.y, float(y0[c])) << c;
     EXPECT_EQ(s.bidirectional, a.bidirectional()[size_t(c)] != 0) << c;
   }
-  // F_B = (2*4 + 0.5*2 + 1*2) / 26
-  EXPECT_NEAR(a.lightTracingWeight(), 26.0 / 11.0, 1e-12);
+  // F_B = (2*4 + 0.5*2 + 1*2) / 26, to the grid of 2^-24 the cells' probabilities are on
+  EXPECT_NEAR(a.lightTracingWeight(), 26.0 / 11.0, 26.0 / 11.0 * 0x1p-24 / (11.0 / 26.0) * 6);
 }
 
 // Drawn many times, each cell is picked with probability d_c a_c / sum d a and its points stay
@@ -68,6 +68,38 @@ TEST(PixelAllocation, DrawsCellsInProportionToDensityTimesArea) {
   }
   // E[weight] = sum_c P_c a_c / (A P_c) = 1; its spread over draws is below 2 here.
   EXPECT_NEAR(weightSum / n, 1.0, 4 * 2 / std::sqrt(double(n)));
+}
+
+// Over every u0 Rng::nextFloat can draw (the 2^24 multiples of 2^-24), each cell's share of
+// the draws times its camera weight is its share of the film exactly: the weights are those
+// of the probabilities the draws give, not of the unrounded densities. Cells a few grid points
+// wide (densities 10^-4 of the largest, 4096 cells) are where rounding would show.
+TEST(PixelAllocation, WeightsAreExactOverEveryDrawOfTheCell) {
+  const int w = 64, h = 64;
+  std::vector<float> density(size_t(w * h));
+  std::vector<uint8_t> bidirectional(density.size());
+  for (size_t c = 0; c < density.size(); ++c) {
+    density[c] = c % 7 == 0 ? 1e-4f : float(1 + c % 13);
+    bidirectional[c] = uint8_t(c % 3 == 0);
+  }
+  const PixelAllocation a(w, h, 1, density, bidirectional);
+  std::vector<double> weightSum(density.size(), 0.0);
+  std::vector<int64_t> count(density.size(), 0);
+  const int64_t draws = int64_t(1) << 24;
+  for (int64_t k = 0; k < draws; ++k) {
+    const auto s = a.sampleFilm(float(k) * 0x1p-24f, 0.5f, 0.5f);
+    const size_t c = size_t(int(s.film.y) * w + int(s.film.x));
+    weightSum[c] += s.cameraWeight;
+    ++count[c];
+  }
+  int64_t bidirectionalDraws = 0;
+  for (size_t c = 0; c < density.size(); ++c) {
+    ASSERT_GT(count[c], 0) << c;
+    // float weights: exact to float rounding of one weight
+    EXPECT_NEAR(weightSum[c] / double(draws), 1.0 / double(w * h), 2e-7 / double(w * h)) << c;
+    if (bidirectional[c]) bidirectionalDraws += count[c];
+  }
+  EXPECT_NEAR(a.lightTracingWeight(), double(draws) / double(bidirectionalDraws), 1e-12);
 }
 
 TEST(PixelAllocation, EdgesOfTheUnitIntervalStayOnTheFilm) {

@@ -58,6 +58,10 @@ std::vector<PilotFigure> runPilot(std::shared_ptr<const Scene> scene,
 constexpr double kAllocationShare = 0.1;
 constexpr double kAllocationMinSeconds = 0.5;
 constexpr uint64_t kAllocationSeedSalt = 0x6a09e667f3bcc909ull;
+// Rng::seed adds the seed to the state of a stream that depends on the sample's index alone: the
+// pilot's sample k and the job's run the same PCG stream, (seed ^ salt) - seed steps apart, odd
+// (an odd salt flips the lowest bit) and so never zero.
+static_assert(kAllocationSeedSalt % 2 == 1, "the salt must be odd");
 
 // The allocation pilot's seconds for these settings; 0: none.
 double allocationPilotSeconds(const RenderSettings& settings);
