@@ -7,7 +7,7 @@ from the bootstrap and the chains' large steps (common/mcmc/normalization.h) aga
 bootstrap's alone (issue 42), and good for any change to a chain.
 
     bench/pooled_z_effect.py CORPUS OUT --before FARM --after FARM [--scenes a,b] [--algorithms
-                             pssmlt,mmlt] [--seeds 1 2 3] [--seconds 30] [--size 64] [--table-only]
+                             pssmlt,mmlt] [--seeds 101 102 103] [--seconds 30] [--size 64] [--table-only]
 
 About 2 x scenes x algorithms x seeds x (seconds + 1) seconds. Run it alone.
 """
@@ -19,6 +19,8 @@ import subprocess
 
 import numpy as np
 import OpenImageIO as oiio
+
+from corpus_common import reference_seeds
 
 
 def read_rgb(path):
@@ -37,7 +39,7 @@ def main():
     parser.add_argument("--after", required=True)
     parser.add_argument("--scenes", default="light-in-glass-2,environment-2,light-in-glass-0")
     parser.add_argument("--algorithms", default="pssmlt,mmlt")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[101, 102, 103])
     parser.add_argument("--seconds", type=float, default=30)
     parser.add_argument("--size", type=int, default=64)
     parser.add_argument("--table-only", action="store_true")
@@ -46,6 +48,11 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     scenes, algorithms = args.scenes.split(","), args.algorithms.split(",")
     name = lambda s, a, k, b: os.path.join(args.out, "%s-%s-%d-%s" % (s, a, k, b))
+    for s in scenes:  # a reference's own seeds share its random numbers (bench/corpus_common.py)
+        shared = sorted(set(args.seeds) & reference_seeds(os.path.join(args.corpus, s,
+                                                                       "reference.json")))
+        if shared:
+            raise SystemExit(f"{s}: seeds {shared} are the reference's own: use others")
     for s in scenes if not args.table_only else []:
         d = os.path.join(args.corpus, s)
         for a in algorithms:

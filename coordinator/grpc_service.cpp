@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <set>
 #include <thread>
 
 #include "coordinator/coordinator.h"
@@ -417,6 +418,14 @@ class WorkerService final : public v1::WorkerApi::Service {
       return invalid("wait_ms must be in [0, " + std::to_string(maxWait.count()) + "], got " +
                      std::to_string(request->wait_ms()));
     }
+    if (request->pixel_allocations_held_size() > kMaxHeldAllocations) {
+      return invalid("more than " + std::to_string(kMaxHeldAllocations) +
+                     " pixel allocations held");
+    }
+    // An allocation's bytes go to a worker once, with the first lease that names it (a job's
+    // chains share one, up to 320 KiB).
+    std::set<std::string> held(request->pixel_allocations_held().begin(),
+                               request->pixel_allocations_held().end());
     std::vector<WorkerLease> leases;
     Status s = coordinator_->leaseChains(request->worker_id(), request->max_chains(), &leases,
                                          std::chrono::milliseconds(request->wait_ms()),
@@ -437,8 +446,12 @@ class WorkerService final : public v1::WorkerApi::Service {
       lease->set_bundle_hash(w.bundleHash);
       lease->set_scene_path(w.bundleScenePath);
       *lease->mutable_settings() = farm::toProto(w.settings);
-      // The work unit carries the pixel allocation; a second copy would only fill the message.
+      // The work unit names its pixel allocation; the settings' copy would only fill the message.
       lease->mutable_settings()->clear_pixel_allocation();
+      const std::string& hash = lease->spec().pixel_allocation_hash();
+      if (!hash.empty() && held.insert(hash).second) {
+        lease->set_pixel_allocation(w.lease.spec.pixelAllocation->encode());
+      }
     }
     if (leases.empty()) response->set_retry_after_ms(500);
     return grpc::Status::OK;

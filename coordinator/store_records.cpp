@@ -130,9 +130,24 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   plan->bootstrap.nonZeroCandidates = r.non_zero_candidates();
   plan->bootstrap.seconds = r.bootstrap_seconds();
   plan->bootstrap.abandonedConnections = r.abandoned_connections();
+  if (r.has_planned_settings()) {
+    RenderSettings settings;
+    if (!fromProto(r.planned_settings(), &settings, error)) return false;
+    plan->plannedSettings = settings;
+  }
+  // The chains name the planned settings' allocation, stored once for all of them.
+  std::shared_ptr<const PixelAllocation> allocation;
+  std::string allocationHash;
+  if (plan->plannedSettings && plan->plannedSettings->pixelAllocation) {
+    allocation = plan->plannedSettings->pixelAllocation;
+    allocationHash = pixelAllocationHash(allocation);
+  }
+  const AllocationLookup lookup = [&](const std::string& hash) {
+    return hash == allocationHash ? allocation : nullptr;
+  };
   for (const farm::v1::ChainSpec& c : r.chains()) {
     ChainSpec chain;
-    if (!fromProto(c, &chain, error)) return false;
+    if (!fromProto(c, &chain, error, lookup)) return false;
     plan->chains.push_back(std::move(chain));
   }
   plan->plannedWork = r.planned_work();
@@ -145,11 +160,6 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   plan->loadSeconds = r.load_seconds();
   plan->warnings.assign(r.warnings().begin(), r.warnings().end());
   plan->renderPlan.assign(r.render_plan().begin(), r.render_plan().end());
-  if (r.has_planned_settings()) {
-    RenderSettings settings;
-    if (!fromProto(r.planned_settings(), &settings, error)) return false;
-    plan->plannedSettings = settings;
-  }
   return true;
 }
 

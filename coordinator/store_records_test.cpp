@@ -236,18 +236,22 @@ namespace farm {
 namespace {
 
 // A plan whose bdpt samples a pilot placed comes back with its allocation, in the planned
-// settings and in every chain (a restarted coordinator resumes them as they were leased).
+// settings and in every chain (a restarted coordinator resumes them as they were leased); the
+// record holds the allocation's bytes once, not once per chain.
 TEST(StoreRecords, APlansPixelAllocationComesBack) {
-  auto allocation = std::make_shared<const PixelAllocation>(4, 2, 2, std::vector<float>{1, 3},
-                                                            std::vector<uint8_t>{1, 1});
+  constexpr int kCells = 64;
+  std::vector<float> density(kCells * kCells);
+  for (size_t i = 0; i < density.size(); ++i) density[i] = 1.0f + float(i % 7);
+  auto allocation = std::make_shared<const PixelAllocation>(
+      kCells, kCells, 1, density, std::vector<uint8_t>(density.size(), 1));
   JobPlan plan;
-  plan.width = 4;
-  plan.height = 2;
+  plan.width = kCells;
+  plan.height = kCells;
   RenderSettings settings;
   settings.algorithm = Algorithm::Bidirectional;
   settings.pixelAllocation = allocation;
   plan.plannedSettings = settings;
-  for (uint32_t c = 0; c < 2; ++c) {
+  for (uint32_t c = 0; c < 8; ++c) {
     ChainSpec spec;
     spec.chainIndex = c;
     spec.algorithm = Algorithm::Bidirectional;
@@ -255,16 +259,23 @@ TEST(StoreRecords, APlansPixelAllocationComesBack) {
     spec.pixelAllocation = allocation;
     plan.chains.push_back(spec);
   }
+  const std::string record = store::encodePlan(plan);
+  EXPECT_LT(record.size(), 2 * allocation->encode().size()) << "the allocation is stored per chain";
   JobPlan back;
   std::string error;
-  ASSERT_TRUE(store::decodePlan(store::encodePlan(plan), &back, &error)) << error;
+  ASSERT_TRUE(store::decodePlan(record, &back, &error)) << error;
   ASSERT_TRUE(back.plannedSettings && back.plannedSettings->pixelAllocation);
   EXPECT_EQ(back.plannedSettings->pixelAllocation->encode(), allocation->encode());
-  ASSERT_EQ(back.chains.size(), 2u);
+  ASSERT_EQ(back.chains.size(), 8u);
   for (const ChainSpec& c : back.chains) {
     ASSERT_TRUE(c.pixelAllocation);
     EXPECT_EQ(c.pixelAllocation->encode(), allocation->encode());
   }
+
+  // Chains that name an allocation the planned settings do not hold: an unreadable record.
+  plan.plannedSettings->pixelAllocation = nullptr;
+  EXPECT_FALSE(store::decodePlan(store::encodePlan(plan), &back, &error));
+  EXPECT_NE(error.find("did not come with it"), std::string::npos) << error;
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "proto/sha256.h"
+
 namespace farm {
 
 namespace {
@@ -191,11 +193,12 @@ v1::ChainSpec toProto(const ChainSpec& spec) {
   m.set_seen_emission_every(spec.seenEmissionEvery);
   m.set_seen_emission_scale(spec.seenEmissionScale);
   m.set_large_step_mis(spec.largeStepMis);
-  if (spec.pixelAllocation) m.set_pixel_allocation(spec.pixelAllocation->encode());
+  if (spec.pixelAllocation) m.set_pixel_allocation_hash(pixelAllocationHash(spec.pixelAllocation));
   return m;
 }
 
-bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
+bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error,
+               const AllocationLookup& lookup) {
   ChainSpec s;
   if (!fromProto(m.algorithm(), &s.algorithm, error)) return false;
   s.jobId = m.job_id();
@@ -231,15 +234,25 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
              std::to_string(s.largeStepMis) + " (must be finite and >= 0)";
     return false;
   }
-  if (!m.pixel_allocation().empty()) {
+  if (!m.pixel_allocation().empty() || !m.pixel_allocation_hash().empty()) {
+    const std::string chain = "chain " + std::to_string(s.chainIndex);
     if (s.algorithm != Algorithm::PathTracing && s.algorithm != Algorithm::Bidirectional) {
-      *error = "chain " + std::to_string(s.chainIndex) + " of " + algorithmName(s.algorithm) +
+      *error = chain + " of " + algorithmName(s.algorithm) +
                " has a pixel allocation (only pt and bdpt take one)";
       return false;
     }
-    if (!decodeAllocation(m.pixel_allocation(), &s.pixelAllocation, error)) {
-      *error = "chain " + std::to_string(s.chainIndex) + ": " + *error;
-      return false;
+    if (!m.pixel_allocation().empty()) {  // a plan record of protocol 7 or before
+      if (!decodeAllocation(m.pixel_allocation(), &s.pixelAllocation, error)) {
+        *error = chain + ": " + *error;
+        return false;
+      }
+    } else {
+      if (lookup) s.pixelAllocation = lookup(m.pixel_allocation_hash());
+      if (!s.pixelAllocation) {
+        *error = chain + " names pixel allocation " + m.pixel_allocation_hash().substr(0, 64) +
+                 ", which did not come with it";
+        return false;
+      }
     }
   }
   if (s.seenEmissionEvery < 0 || !std::isfinite(s.seenEmissionScale) || s.seenEmissionScale < 0) {
@@ -255,6 +268,27 @@ bool fromProto(const v1::ChainSpec& m, ChainSpec* out, std::string* error) {
   }
   *out = s;
   return true;
+}
+
+std::string pixelAllocationHash(const std::shared_ptr<const PixelAllocation>& allocation) {
+  // A weak pointer keeps the remembered allocation's address from being reused by another while
+  // the hash is kept: it is compared only while the allocation lives.
+  thread_local std::weak_ptr<const PixelAllocation> last;
+  thread_local std::string lastHash;
+  if (!allocation) return {};
+  if (const auto held = last.lock(); held && held == allocation) return lastHash;
+  lastHash = sha256Hex(allocation->encode());
+  last = allocation;
+  return lastHash;
+}
+
+bool decodePixelAllocation(const std::string& bytes, const std::string& hash,
+                           std::shared_ptr<const PixelAllocation>* out, std::string* error) {
+  if (sha256Hex(bytes) != hash) {
+    *error = "pixel allocation bytes that are not " + hash.substr(0, 64);
+    return false;
+  }
+  return decodeAllocation(bytes, out, error);
 }
 
 v1::JobPhase toProto(JobPhase phase) {

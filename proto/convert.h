@@ -1,6 +1,8 @@
 #pragma once
 // Translation between the wire messages of farm.proto and the renderer's plain structs. The
 // renderer (common/) knows nothing of protobuf; this is the only place the two meet.
+#include <functional>
+#include <memory>
 #include <string>
 
 #include "common/chain/chain_spec.h"
@@ -19,8 +21,22 @@ v1::RenderSettings toProto(const RenderSettings& settings);
 // Converts only; the caller still runs RenderSettings::validate().
 bool fromProto(const v1::RenderSettings& message, RenderSettings* out, std::string* error);
 
+// A work unit names its pixel allocation by hash (pixelAllocationHash); the bytes travel once
+// per job and worker, beside the work units (farm.proto's ChainLease, the store's plan record).
 v1::ChainSpec toProto(const ChainSpec& spec);
-bool fromProto(const v1::ChainSpec& message, ChainSpec* out, std::string* error);
+// The allocation a hash names among those that came with the work unit; null when none did.
+using AllocationLookup =
+    std::function<std::shared_ptr<const PixelAllocation>(const std::string& hash)>;
+// A work unit that names an allocation `lookup` does not know is refused (*error says which).
+bool fromProto(const v1::ChainSpec& message, ChainSpec* out, std::string* error,
+               const AllocationLookup& lookup = {});
+// The SHA-256 (lowercase hex) of the allocation's byte form: its name on the wire. Remembers the
+// last allocation this thread asked about, since every lease of a job asks about the same one.
+std::string pixelAllocationHash(const std::shared_ptr<const PixelAllocation>& allocation);
+// An allocation's bytes that arrived beside its work units, decoded and checked against the hash
+// they were sent as.
+bool decodePixelAllocation(const std::string& bytes, const std::string& hash,
+                           std::shared_ptr<const PixelAllocation>* out, std::string* error);
 // A chain's flush as an upload's entry (everything but its film; the upload carries the film) and
 // back.
 void toProto(const ChainFlush& flush, uint64_t epoch, v1::FlushEntry* entry);

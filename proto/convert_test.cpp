@@ -11,6 +11,8 @@
 #include <set>
 #include <string>
 
+#include "proto/sha256.h"
+
 namespace farm {
 namespace {
 
@@ -119,9 +121,10 @@ TEST(Convert, CombinedLargeStepsCrossTheWire) {
 namespace farm {
 namespace {
 
-// A pixel allocation crosses the wire in a job's settings (and so into the store, which keeps
-// them as this message) and in each pt or bdpt work unit; a malformed one, or one on a chain that
-// cannot take it, is refused with the reason.
+// A pixel allocation crosses the wire whole in a job's settings (and so into the store, which
+// keeps them as this message); a pt or bdpt work unit names it by hash and takes it from what
+// came beside it. A malformed one, bytes that are not the hash's, a hash nothing came with and an
+// allocation on a chain that cannot take it are refused with the reason.
 TEST(Convert, PixelAllocationCrossesTheWire) {
   auto allocation = std::make_shared<const PixelAllocation>(3, 2, 2, std::vector<float>{1, 2},
                                                             std::vector<uint8_t>{0, 1});
@@ -138,23 +141,67 @@ TEST(Convert, PixelAllocationCrossesTheWire) {
   spec.algorithm = Algorithm::PathTracing;
   spec.flushInterval = 100;
   spec.pixelAllocation = allocation;
+  const v1::ChainSpec unit = toProto(spec);
+  EXPECT_TRUE(unit.pixel_allocation().empty()) << "the bytes travel once per job, not per chain";
+  EXPECT_EQ(unit.pixel_allocation_hash(), sha256Hex(allocation->encode()));
+  std::shared_ptr<const PixelAllocation> arrived;
+  ASSERT_TRUE(
+      decodePixelAllocation(allocation->encode(), unit.pixel_allocation_hash(), &arrived, &error))
+      << error;
+  const AllocationLookup lookup = [&](const std::string& hash) {
+    return hash == unit.pixel_allocation_hash() ? arrived : nullptr;
+  };
   ChainSpec chain;
-  ASSERT_TRUE(fromProto(toProto(spec), &chain, &error)) << error;
+  ASSERT_TRUE(fromProto(unit, &chain, &error, lookup)) << error;
   ASSERT_TRUE(chain.pixelAllocation);
   EXPECT_EQ(chain.pixelAllocation->density(), allocation->density());
 
-  v1::ChainSpec truncated = toProto(spec);
-  truncated.mutable_pixel_allocation()->pop_back();
-  EXPECT_FALSE(fromProto(truncated, &chain, &error));
+  EXPECT_FALSE(fromProto(unit, &chain, &error));
+  EXPECT_NE(error.find("did not come with it"), std::string::npos) << error;
+  std::string truncated = allocation->encode();
+  truncated.pop_back();
+  EXPECT_FALSE(decodePixelAllocation(truncated, unit.pixel_allocation_hash(), &arrived, &error));
+  EXPECT_NE(error.find("pixel allocation"), std::string::npos) << error;
+  EXPECT_FALSE(decodePixelAllocation(truncated, sha256Hex(truncated), &arrived, &error));
   EXPECT_NE(error.find("pixel allocation"), std::string::npos) << error;
   v1::RenderSettings badSettings = toProto(settings);
   badSettings.set_pixel_allocation("not one");
   EXPECT_FALSE(fromProto(badSettings, &back, &error));
   EXPECT_NE(error.find("pixel allocation"), std::string::npos) << error;
 
+  // A plan record of protocol 7 kept the bytes in each chain: still resumed.
+  v1::ChainSpec old = unit;
+  old.clear_pixel_allocation_hash();
+  old.set_pixel_allocation(allocation->encode());
+  ASSERT_TRUE(fromProto(old, &chain, &error)) << error;
+  ASSERT_TRUE(chain.pixelAllocation);
+  EXPECT_EQ(chain.pixelAllocation->encode(), allocation->encode());
+  old.mutable_pixel_allocation()->pop_back();
+  EXPECT_FALSE(fromProto(old, &chain, &error));
+  EXPECT_NE(error.find("pixel allocation"), std::string::npos) << error;
+
   spec.algorithm = Algorithm::PSSMLT;
-  EXPECT_FALSE(fromProto(toProto(spec), &chain, &error));
+  EXPECT_FALSE(fromProto(toProto(spec), &chain, &error, lookup));
   EXPECT_NE(error.find("only pt and bdpt"), std::string::npos) << error;
+}
+
+// The hash a work unit names is its allocation's, also when the thread asked about another last
+// (the memo is of one allocation, which must not answer for the next).
+TEST(Convert, PixelAllocationHashIsEachAllocations) {
+  auto a = std::make_shared<const PixelAllocation>(3, 2, 2, std::vector<float>{1, 2},
+                                                   std::vector<uint8_t>{0, 1});
+  auto b = std::make_shared<const PixelAllocation>(3, 2, 2, std::vector<float>{2, 1},
+                                                   std::vector<uint8_t>{0, 1});
+  EXPECT_EQ(pixelAllocationHash(a), sha256Hex(a->encode()));
+  EXPECT_EQ(pixelAllocationHash(b), sha256Hex(b->encode()));
+  EXPECT_EQ(pixelAllocationHash(a), sha256Hex(a->encode()));
+  for (int i = 0; i < 3; ++i) {  // freed and made again, possibly at the same address
+    a.reset();
+    a = std::make_shared<const PixelAllocation>(3, 2, 2, std::vector<float>{1, float(3 + i)},
+                                                std::vector<uint8_t>{0, 1});
+    EXPECT_EQ(pixelAllocationHash(a), sha256Hex(a->encode()));
+  }
+  EXPECT_EQ(pixelAllocationHash(nullptr), "");
 }
 
 }  // namespace

@@ -11,8 +11,15 @@ namespace farm {
 // 5: RenderSettings.shading_normals, which a worker of 4 would drop and render the scene's
 // convention where the job overrides it; 6: a single flush is a batch of one (FlushHeader holds
 // its entry in `entries`, where a worker of 5 sends it in the header's own fields); 7: pixel
-// allocations (ChainSpec.pixel_allocation), which a worker of 6 would drop and sample uniformly
-inline constexpr uint32_t kProtocolVersion = 7;
+// allocations (ChainSpec.pixel_allocation), which a worker of 6 would drop and sample uniformly;
+// 8: an allocation travels once per worker (ChainSpec.pixel_allocation_hash, ChainLease's bytes),
+// which a worker of 7 would not find in its work unit
+inline constexpr uint32_t kProtocolVersion = 8;
+
+// Pixel allocations a worker keeps and names in a lease request (LeaseChainsRequest.
+// pixel_allocations_held): a job has one, so this many jobs at once share a worker without
+// their allocations travelling again.
+inline constexpr int kMaxHeldAllocations = 16;
 
 // gRPC message size limit, set explicitly on servers and channels (the library default of 4 MiB
 // is implicit and asymmetric between send and receive).

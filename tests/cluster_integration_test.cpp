@@ -9,11 +9,13 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <utility>
 
 #include "common/film/image.h"
+#include "common/film/pixel_allocation.h"
 #include "tests/test_support.h"
 
 namespace farm::testing {
@@ -30,7 +32,28 @@ struct ClusterCase {
   std::vector<std::string> budget;  // --spp N or --mpp N
   std::string scene;
   std::string name;  // the test's name when not the algorithm's
+  // Render with a pixel allocation (a checkerboard of pt and bdpt cells at several densities):
+  // each worker must receive it once and draw every chain's film points from it.
+  bool pixelAllocation = false;
 };
+
+ClusterCase withPixelAllocation(ClusterCase c) {
+  c.pixelAllocation = true;
+  return c;
+}
+
+// Writes the allocation of a ClusterCase (a 64x48 film in 8x8 cells) to `path`.
+void writeCheckerboardAllocation(const std::string& path) {
+  const int cells = 8 * 6;
+  std::vector<float> density(cells);
+  std::vector<uint8_t> bidirectional(cells);
+  for (int i = 0; i < cells; ++i) {
+    density[size_t(i)] = 0.25f + float(i % 5);
+    bidirectional[size_t(i)] = uint8_t((i + i / 8) % 2);
+  }
+  std::ofstream(path, std::ios::binary)
+      << PixelAllocation(64, 48, 8, density, bidirectional).encode();
+}
 
 void PrintTo(const ClusterCase& c, std::ostream* os) {
   *os << c.algorithm << " " << c.scene;
@@ -96,6 +119,10 @@ TEST_P(ClusterTest, FetchedImageMatchesEmbeddedRender) {
   std::vector<std::string> settings = {"--algorithm", c.algorithm, "--width", "64",
                                        "--height",    "48",        "--seed",  "7"};
   settings.insert(settings.end(), c.budget.begin(), c.budget.end());
+  if (c.pixelAllocation) {
+    writeCheckerboardAllocation(scratch / "allocation.bin");
+    settings.insert(settings.end(), {"--pixel-allocation", scratch / "allocation.bin"});
+  }
 
   const std::string job = submitJob(coordinator.address(), settings, scratch.path(), c.scene);
   ASSERT_EQ(job.rfind("job-", 0), 0u) << "last line of stdout: " << job;
@@ -133,11 +160,22 @@ TEST_P(ClusterTest, FetchedImageMatchesEmbeddedRender) {
 
   Image distributed, embedded;
   std::string error;
-  ASSERT_TRUE(readExr(scratch / "distributed.exr", &distributed, &error)) << error;
+  ImageMetadata metadata;
+  ASSERT_TRUE(readExr(scratch / "distributed.exr", &distributed, &error, &metadata)) << error;
   ASSERT_TRUE(readExr(scratch / "embedded.exr", &embedded, &error)) << error;
   EXPECT_EQ(distributed.width, 64);
   EXPECT_EQ(distributed.height, 48);
   expectImagesAgree(distributed, embedded);
+  if (c.pixelAllocation) {  // the image is the allocation's, not uniform sampling's
+    EXPECT_NE(metadata.count("farm:pixelAllocation"), 0u);
+    std::vector<std::string> uniform = {
+        FARM_CLI_BIN, "render", c.scene, "-o", scratch / "uniform.exr", "--threads", "2"};
+    uniform.insert(uniform.end(), settings.begin(), settings.end() - 2);
+    ASSERT_EQ(runCommand(uniform, seconds(120), scratch.path()).exitCode, 0);
+    Image other;
+    ASSERT_TRUE(readExr(scratch / "uniform.exr", &other, &error)) << error;
+    EXPECT_NE(other.rgb, distributed.rgb);
+  }
   EXPECT_TRUE(std::filesystem::exists(scratch / "distributed.png"));
   EXPECT_TRUE(std::filesystem::exists(scratch / "embedded.png"));
   EXPECT_EQ(coordinator.process().stop(), 0);
@@ -403,6 +441,7 @@ INSTANTIATE_TEST_SUITE_P(
     Algorithms, ClusterTest,
     ::testing::Values(
         ClusterCase{"pt", {"--spp", "64"}}, ClusterCase{"bdpt", {"--spp", "16"}},
+        withPixelAllocation({"bdpt", {"--spp", "16"}, kScene, "bdpt_pixel_allocation"}),
         ClusterCase{"pssmlt", {"--mpp", "32"}}, ClusterCase{"pssmlt-pt", {"--mpp", "32"}},
         ClusterCase{"mmlt", {"--mpp", "32"}}, ClusterCase{"mlt", {"--mpp", "32"}},
         // Kelemen's combination of the large steps: a setting and a weight per

@@ -12,6 +12,7 @@
 #include <limits>
 #include <thread>
 
+#include "common/film/pixel_allocation.h"
 #include "proto/farm.grpc.pb.h"
 #include "proto/sha256.h"
 #include "proto/wire_limits.h"
@@ -446,6 +447,70 @@ TEST_F(HostileRpcTest, LeaseWaitOutsideItsRangeIsRejected) {
     EXPECT_STATUS(stub->LeaseChains(&context, request, &response), INVALID_ARGUMENT,
                   "wait_ms must be in [0, 10000]");
   }
+}
+
+// A job's pixel allocation goes to a worker once, with the first of its leases; every work unit
+// names it by hash, and a worker that says it holds it (a job before had the same one) gets none
+// of its bytes. A request naming more than it may hold is refused.
+TEST_F(HostileRpcTest, APixelAllocationTravelsOncePerWorker) {
+  std::vector<float> density(16);
+  for (size_t i = 0; i < density.size(); ++i) density[i] = 1.0f + float(i);
+  const PixelAllocation allocation(16, 16, 4, density, std::vector<uint8_t>(density.size(), 0));
+  const std::string bytes = allocation.encode();
+  const std::string hash = sha256Hex(bytes);
+  v1::RenderSettings settings = smallSettings();  // pt, which registerWorker() offers
+  settings.set_num_chains(4);
+  settings.set_pixel_allocation(bytes);
+  const std::string workerId = registerWorker();
+  auto stub = worker();
+  // Leases the job's chains, with `held` named; how many of them carried the allocation's bytes.
+  const auto leaseJob = [&](const std::string& jobId, const std::vector<std::string>& held) {
+    grpc::ClientContext context;
+    withDeadline(&context);
+    v1::LeaseChainsRequest request;
+    request.set_worker_id(workerId);
+    request.set_max_chains(64);  // earlier tests' chains may come too
+    for (const std::string& h : held) request.add_pixel_allocations_held(h);
+    v1::LeaseChainsResponse response;
+    const grpc::Status s = stub->LeaseChains(&context, request, &response);
+    EXPECT_TRUE(s.ok()) << s.error_message();
+    int leases = 0, withBytes = 0;
+    for (const v1::ChainLease& lease : response.leases()) {
+      if (lease.spec().job_id() != jobId) continue;
+      ++leases;
+      EXPECT_EQ(lease.spec().pixel_allocation_hash(), hash);
+      EXPECT_TRUE(lease.spec().pixel_allocation().empty());
+      EXPECT_TRUE(lease.settings().pixel_allocation().empty());
+      if (!lease.pixel_allocation().empty()) {
+        EXPECT_EQ(lease.pixel_allocation(), bytes);
+        ++withBytes;
+      }
+    }
+    EXPECT_EQ(leases, 4) << "the job's chains";
+    return withBytes;
+  };
+
+  std::string first, second;
+  ASSERT_TRUE(
+      submit(settings, {{"scene.xml", kSceneXml}}, {{"scene.xml", kSceneXml}}, "scene.xml", &first)
+          .ok());
+  ASSERT_EQ(waitPastBootstrap(first).phase(), v1::RENDERING);
+  EXPECT_EQ(leaseJob(first, {}), 1);
+  ASSERT_TRUE(
+      submit(settings, {{"scene.xml", kSceneXml}}, {{"scene.xml", kSceneXml}}, "scene.xml", &second)
+          .ok());
+  ASSERT_EQ(waitPastBootstrap(second).phase(), v1::RENDERING);
+  EXPECT_EQ(leaseJob(second, {std::string(64, '0'), hash}), 0);
+
+  grpc::ClientContext context;
+  withDeadline(&context);
+  v1::LeaseChainsRequest request;
+  request.set_worker_id(workerId);
+  request.set_max_chains(1);
+  for (int i = 0; i <= kMaxHeldAllocations; ++i) request.add_pixel_allocations_held(hash);
+  v1::LeaseChainsResponse response;
+  EXPECT_STATUS(stub->LeaseChains(&context, request, &response), INVALID_ARGUMENT,
+                "pixel allocations held");
 }
 
 TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {

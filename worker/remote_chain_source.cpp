@@ -68,6 +68,60 @@ struct RemoteChainSource::Impl {
   std::mutex leaseMutex;  // guards the interruption
   bool interrupted = false;
   grpc::ClientContext* waitingLease = nullptr;  // the lease call in progress, if any
+  // The pixel allocations this worker holds, most recently used last (at most
+  // kMaxHeldAllocations between leases): a job's travels once, with its first lease here.
+  std::mutex allocationMutex;
+  std::vector<std::pair<std::string, std::shared_ptr<const PixelAllocation>>> allocations;
+
+  // Takes the allocations that came with `response`'s leases, resolves every lease's work unit
+  // against what is held, and then forgets the least recently used beyond the limit (not before:
+  // a later lease of the same response may name one the request said was held).
+  std::vector<LeasedChain> takeLeases(const v1::LeaseChainsResponse& response) {
+    std::lock_guard<std::mutex> lock(allocationMutex);
+    const auto use = [&](const std::string& hash) -> std::shared_ptr<const PixelAllocation> {
+      for (size_t i = 0; i < allocations.size(); ++i) {
+        if (allocations[i].first != hash) continue;
+        std::rotate(allocations.begin() + long(i), allocations.begin() + long(i) + 1,
+                    allocations.end());
+        return allocations.back().second;
+      }
+      return nullptr;
+    };
+    std::vector<LeasedChain> chains;
+    for (const v1::ChainLease& lease : response.leases()) {
+      LeasedChain chain;
+      std::string problem;
+      const std::string& hash = lease.spec().pixel_allocation_hash();
+      if (!lease.pixel_allocation().empty() && !use(hash)) {
+        std::shared_ptr<const PixelAllocation> allocation;
+        if (!decodePixelAllocation(lease.pixel_allocation(), hash, &allocation, &problem)) {
+          log("ignoring a malformed lease: " + problem);
+          continue;
+        }
+        allocations.emplace_back(hash, std::move(allocation));
+      }
+      if (!fromProto(lease.spec(), &chain.spec, &problem, use) ||
+          !fromProto(lease.settings(), &chain.settings, &problem)) {
+        log("ignoring a malformed lease: " + problem);
+        continue;
+      }
+      chain.jobId = lease.spec().job_id();
+      chain.epoch = lease.epoch();
+      chain.bundleHash = lease.bundle_hash();
+      chain.scenePath = lease.scene_path();
+      chains.push_back(std::move(chain));
+    }
+    if (allocations.size() > size_t(kMaxHeldAllocations)) {
+      allocations.erase(allocations.begin(),
+                        allocations.end() - std::ptrdiff_t(kMaxHeldAllocations));
+    }
+    return chains;
+  }
+
+  void nameHeldAllocations(v1::LeaseChainsRequest* request) {
+    std::lock_guard<std::mutex> lock(allocationMutex);
+    for (const auto& held : allocations) request->add_pixel_allocations_held(held.first);
+  }
 
   void log(const std::string& line) const {
     if (options.log) options.log(line);
@@ -263,6 +317,7 @@ std::vector<LeasedChain> RemoteChainSource::lease(int max, double waitSeconds) {
     v1::LeaseChainsRequest request;
     request.set_worker_id(id);
     request.set_max_chains(max);
+    impl_->nameHeldAllocations(&request);
     v1::LeaseChainsResponse response;
     grpc::ClientContext context;
     {
@@ -285,21 +340,10 @@ std::vector<LeasedChain> RemoteChainSource::lease(int max, double waitSeconds) {
       if (isTransient(status.error_code())) throw SourceUnavailable(message);
       throw std::runtime_error(message);
     }
-    std::vector<LeasedChain> chains;
-    for (const v1::ChainLease& lease : response.leases()) {
-      LeasedChain chain;
-      std::string problem;
-      if (!fromProto(lease.spec(), &chain.spec, &problem) ||
-          !fromProto(lease.settings(), &chain.settings, &problem)) {
-        impl_->log("ignoring a malformed lease: " + problem);
-        continue;
-      }
-      chain.jobId = lease.spec().job_id();
-      chain.epoch = lease.epoch();
-      chain.bundleHash = lease.bundle_hash();
-      chain.scenePath = lease.scene_path();
-      if (impl_->batcher) impl_->batcher->chainStarted(FlushBatcher::key(chain));
-      chains.push_back(std::move(chain));
+    std::vector<LeasedChain> chains = impl_->takeLeases(response);
+    if (impl_->batcher) {
+      for (const LeasedChain& chain : chains)
+        impl_->batcher->chainStarted(FlushBatcher::key(chain));
     }
     return chains;
   }
