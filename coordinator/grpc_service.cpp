@@ -424,8 +424,13 @@ class WorkerService final : public v1::WorkerApi::Service {
     }
     // An allocation's bytes go to a worker once, with the first lease that names it (a job's
     // chains share one, up to 320 KiB).
-    std::set<std::string> held(request->pixel_allocations_held().begin(),
-                               request->pixel_allocations_held().end());
+    std::set<std::string> held;
+    for (const std::string& hash : request->pixel_allocations_held()) {
+      if (!isSha256Hex(hash)) {
+        return invalid("pixel allocation held '" + hash.substr(0, 80) + "' is not a SHA-256 hash");
+      }
+      held.insert(hash);
+    }
     std::vector<WorkerLease> leases;
     Status s = coordinator_->leaseChains(request->worker_id(), request->max_chains(), &leases,
                                          std::chrono::milliseconds(request->wait_ms()),
@@ -445,9 +450,11 @@ class WorkerService final : public v1::WorkerApi::Service {
               .count());
       lease->set_bundle_hash(w.bundleHash);
       lease->set_scene_path(w.bundleScenePath);
-      *lease->mutable_settings() = farm::toProto(w.settings);
-      // The work unit names its pixel allocation; the settings' copy would only fill the message.
-      lease->mutable_settings()->clear_pixel_allocation();
+      // The work unit names its pixel allocation; the settings' copy would only fill the message
+      // (and take encoding on every lease).
+      RenderSettings settings = w.settings;
+      settings.pixelAllocation.reset();
+      *lease->mutable_settings() = farm::toProto(settings);
       const std::string& hash = lease->spec().pixel_allocation_hash();
       if (!hash.empty() && held.insert(hash).second) {
         lease->set_pixel_allocation(w.lease.spec.pixelAllocation->encode());

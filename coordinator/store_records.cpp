@@ -7,6 +7,7 @@
 
 #include "proto/convert.h"
 #include "proto/coordinator_store.pb.h"
+#include "proto/sha256.h"
 #include "proto/zstd_frame.h"
 
 namespace farm::store {
@@ -107,7 +108,19 @@ std::string encodePlan(const JobPlan& plan) {
   r.set_non_zero_candidates(plan.bootstrap.nonZeroCandidates);
   r.set_bootstrap_seconds(plan.bootstrap.seconds);
   r.set_abandoned_connections(plan.bootstrap.abandonedConnections);
-  for (const ChainSpec& chain : plan.chains) *r.add_chains() = toProto(chain);
+  // A chain names its allocation by hash, and the planned settings hold its bytes once; an
+  // allocation they do not hold (none is made so today) keeps its bytes in the chain's record.
+  const std::string planned = plan.plannedSettings
+                                  ? pixelAllocationHash(plan.plannedSettings->pixelAllocation)
+                                  : std::string();
+  for (const ChainSpec& chain : plan.chains) {
+    farm::v1::ChainSpec* c = r.add_chains();
+    *c = toProto(chain);
+    if (!c->pixel_allocation_hash().empty() && c->pixel_allocation_hash() != planned) {
+      c->clear_pixel_allocation_hash();
+      c->set_pixel_allocation(chain.pixelAllocation->encode());
+    }
+  }
   r.set_planned_work(plan.plannedWork);
   r.set_width(plan.width);
   r.set_height(plan.height);
@@ -137,10 +150,11 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   }
   // The chains name the planned settings' allocation, stored once for all of them.
   std::shared_ptr<const PixelAllocation> allocation;
-  std::string allocationHash;
+  std::string allocationHash, allocationBytes;
   if (plan->plannedSettings && plan->plannedSettings->pixelAllocation) {
     allocation = plan->plannedSettings->pixelAllocation;
-    allocationHash = pixelAllocationHash(allocation);
+    allocationBytes = allocation->encode();
+    allocationHash = sha256Hex(allocationBytes);
   }
   const AllocationLookup lookup = [&](const std::string& hash) {
     return hash == allocationHash ? allocation : nullptr;
@@ -148,6 +162,10 @@ bool decodePlan(const std::string& bytes, JobPlan* plan, std::string* error) {
   for (const farm::v1::ChainSpec& c : r.chains()) {
     ChainSpec chain;
     if (!fromProto(c, &chain, error, lookup)) return false;
+    // A record of protocol 7 holds a copy in every chain: they share the planned one.
+    if (allocation && !c.pixel_allocation().empty() && c.pixel_allocation() == allocationBytes) {
+      chain.pixelAllocation = allocation;
+    }
     plan->chains.push_back(std::move(chain));
   }
   plan->plannedWork = r.planned_work();

@@ -269,12 +269,39 @@ TEST(StoreRecords, APlansPixelAllocationComesBack) {
   ASSERT_EQ(back.chains.size(), 8u);
   for (const ChainSpec& c : back.chains) {
     ASSERT_TRUE(c.pixelAllocation);
-    EXPECT_EQ(c.pixelAllocation->encode(), allocation->encode());
+    EXPECT_EQ(c.pixelAllocation.get(), back.plannedSettings->pixelAllocation.get());
   }
 
-  // Chains that name an allocation the planned settings do not hold: an unreadable record.
+  // A record of protocol 7 held the bytes in every chain: its chains come back sharing one.
+  store::v1::PlanRecord old;
+  ASSERT_TRUE(old.ParseFromString(record));
+  for (v1::ChainSpec& c : *old.mutable_chains()) {
+    c.clear_pixel_allocation_hash();
+    c.set_pixel_allocation(allocation->encode());
+  }
+  JobPlan older;
+  ASSERT_TRUE(store::decodePlan(old.SerializeAsString(), &older, &error)) << error;
+  ASSERT_EQ(older.chains.size(), 8u);
+  for (const ChainSpec& c : older.chains) {
+    ASSERT_TRUE(c.pixelAllocation);
+    EXPECT_EQ(c.pixelAllocation.get(), older.plannedSettings->pixelAllocation.get());
+  }
+
+  // Chains whose allocation the planned settings do not hold keep its bytes in their record.
   plan.plannedSettings->pixelAllocation = nullptr;
-  EXPECT_FALSE(store::decodePlan(store::encodePlan(plan), &back, &error));
+  JobPlan apart;
+  ASSERT_TRUE(store::decodePlan(store::encodePlan(plan), &apart, &error)) << error;
+  ASSERT_EQ(apart.chains.size(), 8u);
+  for (const ChainSpec& c : apart.chains) {
+    ASSERT_TRUE(c.pixelAllocation);
+    EXPECT_EQ(c.pixelAllocation->encode(), allocation->encode());
+  }
+  // A record whose chains name an allocation it does not hold is unreadable, and says so.
+  store::v1::PlanRecord broken;
+  ASSERT_TRUE(broken.ParseFromString(record));
+  broken.mutable_planned_settings()->clear_pixel_allocation();
+  JobPlan unreadable;
+  EXPECT_FALSE(store::decodePlan(broken.SerializeAsString(), &unreadable, &error));
   EXPECT_NE(error.find("did not come with it"), std::string::npos) << error;
 }
 

@@ -417,10 +417,11 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   for (const std::string& w : p.setAside) m->add_set_aside(w);
   m->set_width(p.width);
   m->set_height(p.height);
-  *m->mutable_settings() = toProto(p.settings);
   // A poll has no use for the pixel allocation (the render plan's lines say what it did), and
-  // it would fill every answer.
-  m->mutable_settings()->clear_pixel_allocation();
+  // it would fill every answer: left out before it is encoded.
+  RenderSettings settings = p.settings;
+  settings.pixelAllocation.reset();
+  *m->mutable_settings() = toProto(settings);
   m->set_name(p.name);
   m->set_render_seconds(p.renderSeconds);
   m->set_load_seconds(p.loadSeconds);

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <future>
 #include <limits>
+#include <map>
 #include <thread>
 
 #include "common/film/pixel_allocation.h"
@@ -17,6 +18,7 @@
 #include "proto/sha256.h"
 #include "proto/wire_limits.h"
 #include "tests/test_support.h"
+#include "worker/remote_chain_source.h"
 
 namespace farm::testing {
 namespace {
@@ -511,6 +513,62 @@ TEST_F(HostileRpcTest, APixelAllocationTravelsOncePerWorker) {
   v1::LeaseChainsResponse response;
   EXPECT_STATUS(stub->LeaseChains(&context, request, &response), INVALID_ARGUMENT,
                 "pixel allocations held");
+}
+
+// The worker's side of it: a real RemoteChainSource resolves every lease, takes a job's
+// allocation once, names it when it leases the next job with the same one, and holds at most
+// kMaxHeldAllocations (the oldest forgotten comes again when a job needs it).
+TEST_F(HostileRpcTest, AWorkerTakesEachAllocationOnceAndHoldsTheLastSixteen) {
+  const auto allocationBytes = [](int k) {
+    std::vector<float> density(16, 1.0f);
+    density[size_t(k % 16)] = 2.0f + float(k);
+    return PixelAllocation(16, 16, 4, density, std::vector<uint8_t>(16, 0)).encode();
+  };
+  const auto submitWith = [&](const std::string& bytes) {
+    v1::RenderSettings settings = smallSettings();
+    settings.set_num_chains(1);
+    settings.set_pixel_allocation(bytes);
+    std::string id;
+    EXPECT_TRUE(
+        submit(settings, {{"scene.xml", kSceneXml}}, {{"scene.xml", kSceneXml}}, "scene.xml", &id)
+            .ok());
+    EXPECT_EQ(waitPastBootstrap(id).phase(), v1::RENDERING);
+    return id;
+  };
+  RemoteSourceOptions options;
+  options.coordinator = coordinator_->address();
+  options.cacheDir = scratch_->path() + "/allocation-worker-cache";
+  RemoteChainSource source(options);
+  // Leases every chain there is; the ones of `jobs`, each checked to carry `bytes[job]`.
+  const auto leaseJobs = [&](const std::map<std::string, std::string>& bytes) {
+    size_t found = 0;
+    for (const LeasedChain& chain : source.lease(64, 0)) {
+      const auto it = bytes.find(chain.jobId);
+      if (it == bytes.end()) continue;  // an earlier test's
+      ++found;
+      ASSERT_TRUE(chain.spec.pixelAllocation) << chain.jobId;
+      EXPECT_EQ(chain.spec.pixelAllocation->encode(), it->second) << chain.jobId;
+    }
+    EXPECT_EQ(found, bytes.size()) << "every job's chain, resolved";
+  };
+
+  const std::string first = allocationBytes(0);
+  leaseJobs({{submitWith(first), first}});
+  EXPECT_EQ(source.allocationsReceived(), 1);
+  leaseJobs({{submitWith(first), first}});
+  EXPECT_EQ(source.allocationsReceived(), 1) << "the worker holds it and said so";
+
+  std::map<std::string, std::string> many;
+  for (int k = 1; k <= kMaxHeldAllocations; ++k)
+    many[submitWith(allocationBytes(k))] = allocationBytes(k);
+  leaseJobs(many);
+  EXPECT_EQ(source.allocationsReceived(), 1 + kMaxHeldAllocations);
+  // The first is now the least recently used beyond the limit: forgotten, and sent again.
+  leaseJobs({{submitWith(first), first}});
+  EXPECT_EQ(source.allocationsReceived(), 2 + kMaxHeldAllocations);
+  leaseJobs(
+      {{submitWith(allocationBytes(kMaxHeldAllocations)), allocationBytes(kMaxHeldAllocations)}});
+  EXPECT_EQ(source.allocationsReceived(), 2 + kMaxHeldAllocations) << "the newest is held";
 }
 
 TEST_F(HostileRpcTest, BadFlushesAreRejectedAndDuplicatesCountOnce) {

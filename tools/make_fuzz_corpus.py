@@ -173,6 +173,7 @@ requests = {
     "lease-real": request(LEASE, pb.LeaseChainsRequest(worker_id="WKR0", max_chains=-5, wait_ms=-1).SerializeToString()),
     "lease-huge": request(LEASE, pb.LeaseChainsRequest(worker_id="WKR0", max_chains=2**31 - 1, wait_ms=2**31 - 1).SerializeToString()),
     "lease-held-allocations": request(LEASE, pb.LeaseChainsRequest(worker_id="WKR0", max_chains=4, pixel_allocations_held=["0" * 64] * 17 + ["x" * 100000]).SerializeToString()),
+    "lease-held-not-hashes": request(LEASE, pb.LeaseChainsRequest(worker_id="WKR0", max_chains=4, pixel_allocations_held=["0" * 64, "x" * 100000]).SerializeToString()),
     "renew-foreign": request(RENEW, pb.RenewLeasesRequest(worker_id="WKR0", leases=[
         pb.LeaseRef(job_id="JOB0", chain_index=4000000000, epoch=2**64 - 1)] * 3).SerializeToString()),
     "bundle-unknown": request(BUNDLE, pb.FetchSceneBundleRequest(bundle_hash=good_hash).SerializeToString()),

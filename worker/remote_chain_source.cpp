@@ -72,6 +72,7 @@ struct RemoteChainSource::Impl {
   // kMaxHeldAllocations between leases): a job's travels once, with its first lease here.
   std::mutex allocationMutex;
   std::vector<std::pair<std::string, std::shared_ptr<const PixelAllocation>>> allocations;
+  int allocationsReceived = 0;
 
   // Takes the allocations that came with `response`'s leases, resolves every lease's work unit
   // against what is held, and then forgets the least recently used beyond the limit (not before:
@@ -92,13 +93,16 @@ struct RemoteChainSource::Impl {
       LeasedChain chain;
       std::string problem;
       const std::string& hash = lease.spec().pixel_allocation_hash();
-      if (!lease.pixel_allocation().empty() && !use(hash)) {
-        std::shared_ptr<const PixelAllocation> allocation;
-        if (!decodePixelAllocation(lease.pixel_allocation(), hash, &allocation, &problem)) {
-          log("ignoring a malformed lease: " + problem);
-          continue;
+      if (!lease.pixel_allocation().empty()) {
+        ++allocationsReceived;
+        if (!use(hash)) {
+          std::shared_ptr<const PixelAllocation> allocation;
+          if (!decodePixelAllocation(lease.pixel_allocation(), hash, &allocation, &problem)) {
+            log("ignoring a malformed lease: " + problem);
+            continue;
+          }
+          allocations.emplace_back(hash, std::move(allocation));
         }
-        allocations.emplace_back(hash, std::move(allocation));
       }
       if (!fromProto(lease.spec(), &chain.spec, &problem, use) ||
           !fromProto(lease.settings(), &chain.settings, &problem)) {
@@ -362,6 +366,11 @@ std::shared_ptr<const RenderJob> RemoteChainSource::renderJob(const LeasedChain&
 FlushReceipt RemoteChainSource::upload(const LeasedChain& chain, ChainFlush&& flush) {
   if (impl_->batcher) return impl_->batcher->upload(chain, std::move(flush));
   return impl_->uploadSingle(chain, std::move(flush));
+}
+
+int RemoteChainSource::allocationsReceived() const {
+  std::lock_guard<std::mutex> lock(impl_->allocationMutex);
+  return impl_->allocationsReceived;
 }
 
 FlushBatcher::Stats RemoteChainSource::batchStats() const {

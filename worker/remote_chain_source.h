@@ -32,6 +32,8 @@ class RemoteChainSource final : public ChainSource {
   explicit RemoteChainSource(RemoteSourceOptions options);
   ~RemoteChainSource() override;
 
+  // From one thread at a time (WorkerPool's loop): the pixel allocations a request says it holds
+  // must still be held when its answer is read.
   std::vector<LeasedChain> lease(int max, double waitSeconds) override;
   void interrupt() override;
   std::shared_ptr<const RenderJob> renderJob(const LeasedChain& chain) override;
@@ -39,6 +41,9 @@ class RemoteChainSource final : public ChainSource {
   void release(const LeasedChain& chain) override;
   // Uploads sent and flushes in them, with a batch window (zeros without).
   FlushBatcher::Stats batchStats() const;
+  // Leases that brought a pixel allocation's bytes: a job's once while it is among the last
+  // kMaxHeldAllocations (proto/wire_limits.h) this worker used.
+  int allocationsReceived() const;
   std::vector<bool> renew(const std::vector<const LeasedChain*>& chains) override;
   double renewIntervalSeconds() const override;
 

@@ -15,8 +15,8 @@ constexpr uint32_t kMagic = 0x41584950;  // "PIXA"
 constexpr uint32_t kVersion = 1;
 // A film of at most 2^16 pixels a side and cells of at most that: no product overflows.
 constexpr int kMaxSide = 1 << 16;
-// Every work unit carries the allocation: 5 bytes a cell, at most 320 KiB (a 4K film in cells
-// of 16); kept well under the lease's message limit (proto/wire_limits.h).
+// 5 bytes a cell, at most 320 KiB (a 4K film in cells of 16): a job's allocation goes to each
+// worker once, with a lease, well under its message limit (proto/wire_limits.h).
 constexpr size_t kMaxCells = size_t(1) << 16;
 
 }  // namespace
