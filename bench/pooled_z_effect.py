@@ -4,7 +4,8 @@ build by build so that a drift in the machine's speed touches both alike: relati
 the corpus reference (less the reference's own), each render's channel mean against the
 reference's, and the standard error of Z the report gives. Made for the normalization pooled
 from the bootstrap and the chains' large steps (common/mcmc/normalization.h) against the
-bootstrap's alone (issue 42), and good for any change to a chain.
+bootstrap's alone (issue 42), and good for any change to a chain or to auto (`--algorithms auto`:
+keeping the allocation pilot's samples, docs/corpus.md).
 
     bench/pooled_z_effect.py CORPUS OUT --before FARM --after FARM [--scenes a,b] [--algorithms
                              pssmlt,mmlt] [--seeds 101 102 103] [--seconds 30] [--size 64] [--table-only]

@@ -4,11 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "cli/render_report.h"
+#include "common/render/algorithm_pilot.h"
 #include "common/render/local_render.h"
 #include "common/render/render_job.h"
 #include "common/scene/stiff_scenes.h"
@@ -410,6 +413,72 @@ TEST(EmbeddedRender, UntilErrorStopsOnceTheEstimateIsThere) {
   bad.untilError = 1e-3;
   bad.errorGroups = 1;
   EXPECT_NE(bad.validate().find("--until-error needs an error estimate"), std::string::npos);
+}
+
+// --algorithm auto where the plan renders bdpt with a time budget keeps its allocation pilot's
+// samples in the image (algorithm_pilot.h, PilotSamples): uniform samples under the pilot's own
+// seed, pooled with the allocated ones and counted in the work. The pooled image's channel means
+// agree with those of two uniform bdpt renders of other seeds within 4 standard errors (each
+// from the uniform renders' pixel variances, the pooled render's scaled by its samples and its
+// lowest density), and the pilot's share is large enough that its splats without its count, or
+// its count without its splats, would be many standard errors away.
+TEST(EmbeddedRender, AnAllocationPilotsSamplesPoolIntoTheImageUnbiased) {
+  const std::string scene = std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml";
+  EmbeddedRenderOptions o;
+  o.settings.autoAlgorithm = true;
+  o.settings.width = o.settings.height = 32;
+  o.settings.timeBudgetSeconds = 5;  // a pilot of 0.5 s
+  o.settings.seed = 5;
+  o.scenePath = scene;
+  o.threads = 2;
+  o.workers = 1;
+  EmbeddedRenderResult pooled;
+  Status s = renderEmbedded(o, &pooled);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  const JobProgress& p = pooled.progress;
+  ASSERT_EQ(p.settings.algorithm, Algorithm::Bidirectional);
+  ASSERT_TRUE(p.settings.pixelAllocation);
+  const int64_t pilot = p.pilotWork, total = p.workDone;
+  ASSERT_GT(pilot, 0);
+  EXPECT_EQ(pooled.metadata.at("farm:pilotSamples"), std::to_string(pilot));
+  EXPECT_EQ(pooled.metadata.at("farm:samples"), std::to_string(total)) << "the pilot's among them";
+  EXPECT_EQ(pooled.metadata.at("farm:pilotSeed"), std::to_string(5 ^ kAllocationSeedSalt));
+  const double share = double(pilot) / double(total);
+  const std::vector<float>& density = p.settings.pixelAllocation->density();
+  const double lowest = *std::min_element(density.begin(), density.end());
+
+  constexpr int64_t kSpp = 128;
+  Image uniform[2];
+  for (int k = 0; k < 2; ++k) {
+    RenderSettings u;
+    u.algorithm = Algorithm::Bidirectional;
+    u.width = u.height = 32;
+    u.samplesPerPixel = kSpp;
+    u.seed = 2000 + k;
+    uniform[k] = renderLocally(RenderJob(loadScene(scene, u), u, "uniform")).image;
+  }
+  const size_t n = size_t(32) * 32;
+  for (int ch = 0; ch < 3; ++ch) {
+    double sum = 0, uniformSum = 0, var = 0;  // var: of one uniform render's sum
+    for (size_t i = 0; i < n; ++i) {
+      const double a = uniform[0].rgb[3 * i + ch], b = uniform[1].rgb[3 * i + ch];
+      sum += pooled.image.rgb[3 * i + ch];
+      uniformSum += 0.5 * (a + b);
+      var += (a - b) * (a - b) / 2;
+    }
+    const double mean = sum / double(n), uniformMean = uniformSum / double(n);
+    const double seUniform = std::sqrt(var / 2) / double(n);
+    const double sePooled =
+        std::sqrt(var * double(kSpp * int64_t(n)) / double(total) / lowest) / double(n);
+    const double se = std::hypot(seUniform, sePooled);
+    EXPECT_NEAR(mean, uniformMean, 4 * se)
+        << "channel " << ch << ": the pilot's " << pilot << " of " << total << " samples";
+    // The pilot's splats or its count alone would move the mean by about its share: the test
+    // must be able to see that.
+    EXPECT_LT(4 * se, 0.25 * share * uniformMean) << "channel " << ch;
+    std::printf("channel %d: pooled %.5f, uniform %.5f, standard error %.2g, pilot's share %.3f\n",
+                ch, mean, uniformMean, se, share);
+  }
 }
 
 }  // namespace

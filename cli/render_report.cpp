@@ -152,6 +152,7 @@ std::string statusText(const JobProgress& p) {
   out << ", seed " << p.settings.seed << ")\n";
   out << "  " << workUnit(p.settings) << ": " << p.workDone;
   if (p.plannedWork > 0) out << " of " << p.plannedWork;
+  if (p.pilotWork > 0) out << " (" << p.pilotWork << " of them the pilot's)";
   if (p.settings.timeBudgetSeconds > 0) {
     out << " (time budget " << format("%g", p.settings.timeBudgetSeconds) << " s)";
   }
@@ -225,7 +226,9 @@ std::string finalReport(const JobProgress& p, const std::string& scene,
   }
   out << "  " << workUnit(s) << ": " << p.workDone << " ("
       << format("%.2f", pixels > 0 ? p.workDone / pixels : 0) << " per pixel), "
-      << formatCount(p.samplesPerSecond) << "/s over " << p.chainsTotal << " chains\n";
+      << formatCount(p.samplesPerSecond) << "/s over " << p.chainsTotal << " chains";
+  if (p.pilotWork > 0) out << ", " << p.pilotWork << " of them the allocation pilot's";
+  out << "\n";
   out << "  time: " << format("%.2f", p.elapsedSeconds) << " s total (load "
       << format("%.2f", p.loadSeconds) << " s, bootstrap " << format("%.2f", p.bootstrapSeconds)
       << " s = "

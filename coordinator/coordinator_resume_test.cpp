@@ -370,6 +370,92 @@ TEST(DurableResumeAuto, ARestartKeepsThePilotsPickAndThePlan) {
     EXPECT_EQ(lease.lease.spec.algorithm, before.settings.algorithm);
 }
 
+// --algorithm auto where the plan renders bdpt with a time budget: the allocation pilot's
+// samples are the image's first (algorithm_pilot.h, PilotSamples), durable as the job's first
+// checkpoint, and a restart counts them once, before any flush and after flushes replayed from
+// the log.
+TEST(DurableResumeAuto, TheAllocationPilotsSamplesCountOnceAcrossRestarts) {
+  testing::ScratchDir scratch("durable-pilot");
+  JobSpec spec;
+  spec.settings.autoAlgorithm = true;
+  spec.settings.width = spec.settings.height = 32;
+  spec.settings.timeBudgetSeconds = 20;  // a pilot of 2 s; the restarts take far less
+  spec.settings.numChains = 2;
+  spec.settings.seed = 11;
+  spec.scenePath = std::string(FARM_TEST_DATA_DIR) + "/smoky-box/scene.xml";
+  spec.name = "smoky-box";
+  CoordinatorOptions options;
+  options.dataDir = scratch / "data";
+  options.durable = true;
+  options.leaseSeconds = 60;
+  std::string job;
+  int64_t pilot = 0;
+  Image pilotImage, flushedImage;
+  // The image a restarted coordinator resolves, once its scene has loaded again.
+  auto imageOf = [&](Coordinator& c) {
+    for (int i = 0; i < 600 && !c.renderJob(job); ++i)
+      std::this_thread::sleep_for(milliseconds(50));
+    Image image;
+    EXPECT_TRUE(c.currentImage(job, &image).isOk());
+    return image;
+  };
+  {
+    Coordinator first(options);
+    job = submitAndWaitForRendering(first, spec);
+    JobProgress p;
+    ASSERT_TRUE(first.progress(job, 0, &p).isOk());
+    std::string plan;
+    for (const std::string& line : p.renderPlan) plan += line + "\n";
+    ASSERT_EQ(p.settings.algorithm, Algorithm::Bidirectional) << plan;
+    ASSERT_TRUE(p.settings.pixelAllocation) << plan;
+    pilot = p.pilotWork;
+    EXPECT_GT(pilot, 0) << plan;
+    EXPECT_EQ(p.workDone, pilot) << "no chain has flushed yet";
+    EXPECT_EQ(p.samplesPerSecond, 0) << "the rate is the chains' own";
+    ASSERT_TRUE(first.currentImage(job, &pilotImage).isOk()) << "the pilot's samples alone";
+  }
+  int64_t flushed = 0;
+  {
+    Coordinator again(options);
+    JobProgress p;
+    ASSERT_TRUE(again.progress(job, 0, &p).isOk());
+    ASSERT_EQ(p.phase, JobPhase::kRendering) << p.error;
+    EXPECT_EQ(p.pilotWork, pilot) << "the pilot's samples, from the job's first checkpoint";
+    EXPECT_EQ(p.workDone, pilot);
+    EXPECT_LT(worstRelativeDifference(imageOf(again), pilotImage), 1e-6) << "its film too";
+    const std::string worker = registerTestWorker(again, 1);
+    std::vector<WorkerLease> leases;
+    ASSERT_TRUE(again.leaseChains(worker, 8, &leases).isOk());
+    ASSERT_EQ(leases.size(), 2u);
+    for (int i = 0; i < 600 && !again.renderJob(job); ++i)
+      std::this_thread::sleep_for(milliseconds(50));
+    ASSERT_TRUE(again.renderJob(job));
+    for (const WorkerLease& lease : leases) {
+      again.renderJob(job)->runChain(lease.lease.spec, [&](ChainFlush&& flush) {
+        const int64_t mutations = flush.mutations;
+        FlushAck ack;
+        EXPECT_TRUE(
+            again.acceptFlush(worker, job, lease.lease.epoch, std::move(flush), &ack).isOk());
+        EXPECT_EQ(ack.result, FlushAck::Result::kAccepted);
+        flushed += mutations;
+        return false;  // one flush, then the worker "dies"
+      });
+    }
+    ASSERT_GT(flushed, 0);
+    ASSERT_TRUE(again.progress(job, 0, &p).isOk());
+    EXPECT_EQ(p.workDone, pilot + flushed);
+    EXPECT_EQ(p.pilotWork, pilot);
+    flushedImage = imageOf(again);
+  }
+  Coordinator third(options);  // the checkpoint (the pilot's), then the log of the two flushes
+  JobProgress p;
+  ASSERT_TRUE(third.progress(job, 0, &p).isOk());
+  ASSERT_EQ(p.phase, JobPhase::kRendering) << p.error;
+  EXPECT_EQ(p.workDone, pilot + flushed) << "the pilot's samples counted once";
+  EXPECT_EQ(p.pilotWork, pilot);
+  EXPECT_LT(worstRelativeDifference(imageOf(third), flushedImage), 1e-6);
+}
+
 // Every fault counts once (issue 8): a late flush from a worker whose lease moved on is the
 // chain's next flush or a duplicate, never a second copy, and its sender is told to stop;
 // whichever of the two workers delivers first, the image is the uninterrupted run's.

@@ -450,11 +450,8 @@ class WorkerService final : public v1::WorkerApi::Service {
               .count());
       lease->set_bundle_hash(w.bundleHash);
       lease->set_scene_path(w.bundleScenePath);
-      // The work unit names its pixel allocation; the settings' copy would only fill the message
-      // (and take encoding on every lease).
-      RenderSettings settings = w.settings;
-      settings.pixelAllocation.reset();
-      *lease->mutable_settings() = farm::toProto(settings);
+      // The work unit names its pixel allocation; the settings' copy would only fill the message.
+      *lease->mutable_settings() = farm::toProto(w.settings, WithAllocation::kLeftOut);
       const std::string& hash = lease->spec().pixel_allocation_hash();
       if (!hash.empty() && held.insert(hash).second) {
         lease->set_pixel_allocation(w.lease.spec.pixelAllocation->encode());

@@ -130,7 +130,9 @@ void Job::prepare() {
     RenderSettings settings = spec_.settings;
     if (settings.autoAlgorithm && settings.pilot)
       log("planning: a pilot ranks the plan's candidates");
-    const RenderPlan plan = planJob(scene, &settings, [this] { return !cancelRequested_.load(); });
+    PilotSamples pilotSamples;
+    const RenderPlan plan = planJob(
+        scene, &settings, [this] { return !cancelRequested_.load(); }, &pilotSamples);
     std::vector<std::string> planLines = plan.describe();
     for (const std::string& line : planLines) log("plan: " + line);
     auto renderJob = std::make_shared<RenderJob>(scene, settings, id_);
@@ -190,6 +192,23 @@ void Job::prepare() {
     aggregator_ = std::make_unique<SplatAggregator>(renderJob->width(), renderJob->height(),
                                                     errorGroupsOf(chains));
     scheduler_ = std::make_unique<ChainScheduler>(std::move(chains), leaseDuration_, firstEpoch_);
+    if (pilotSamples.work > 0) {
+      // The allocation pilot's samples are the image's first (algorithm_pilot.h, PilotSamples).
+      // Durable at once as the job's first checkpoint: a restart reads them with their counts
+      // from it, or, had the coordinator gone before it, neither (the chains' image alone,
+      // unbiased too), never the one without the other or them twice.
+      try {
+        aggregator_->addPrior(pilotSamples);
+        if (store_) {
+          Status st = store_->checkpoint(id_, *aggregator_, scheduler_->snapshot());
+          if (!st.isOk()) log("cannot checkpoint the pilot's samples: " + st.message());
+        }
+      } catch (const std::exception& e) {
+        // addPrior changes nothing when it refuses: the chains' image alone, as before.
+        log(std::string("the pilot's samples are left out: ") + e.what());
+      }
+      pilotSamples = PilotSamples();
+    }
     renderStarted_ = SteadyClock::now();
     phase_ = JobPhase::kRendering;
     std::string z;
@@ -506,7 +525,7 @@ void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
   phase_ = JobPhase::kFinishing;
   try {
     const int64_t work = aggregator_->workDone();
-    if (work <= 0) {
+    if (work - aggregator_->priorWork() <= 0) {
       failLocked("no chain reported any work before the job ended (time budget too short?)");
       return;
     }
@@ -517,6 +536,11 @@ void Job::finishIfCompleteLocked(SteadyClock::time_point now) {
     ImageMetadata metadata =
         renderJob_->metadata(bootstrap_, work, seconds, aggregator_->largeSteps());
     metadata["farm:jobId"] = id_;
+    if (const int64_t prior = aggregator_->priorWork(); prior > 0) {
+      // farm:samples counts them too: they are in the image.
+      metadata["farm:pilotSamples"] = std::to_string(prior);
+      metadata["farm:pilotSeed"] = std::to_string(settings_.seed ^ kAllocationSeedSalt);
+    }
     std::error_code ec;
     fs::create_directories(outputDir_, ec);
     const std::string path = (fs::path(outputDir_) / "image.exr").string();
@@ -583,6 +607,7 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
   if (renderStarted_) p.renderSeconds = secondsSince(*renderStarted_, now);
   if (aggregator_) {
     p.workDone = aggregator_->workDone();
+    p.pilotWork = aggregator_->priorWork();
     p.rejected = aggregator_->rejected();
     p.tallies = aggregator_->tallies();
     p.rays = aggregator_->rays();
@@ -594,8 +619,10 @@ JobProgress Job::progress(uint32_t errorSeriesFrom) const {
     p.chainsLeased = scheduler_->leasedCount();
     p.activeWorkers = scheduler_->holderCount();
   }
-  const ProgressEstimate estimate = estimateProgress(
-      p.workDone, p.plannedWork, settings_.timeBudgetSeconds, p.elapsedSeconds, p.renderSeconds);
+  // The rate is the chains' own: the pilot's samples were taken before renderSeconds began.
+  const ProgressEstimate estimate =
+      estimateProgress(p.workDone - p.pilotWork, p.plannedWork, settings_.timeBudgetSeconds,
+                       p.elapsedSeconds, p.renderSeconds);
   p.fraction = estimate.fraction;
   p.samplesPerSecond = estimate.samplesPerSecond;
   p.etaSeconds = estimate.etaSeconds;

@@ -30,6 +30,7 @@ nlohmann::json progressJson(const JobProgress& p) {
   j["seed"] = p.settings.seed;
   j["fraction"] = p.fraction;
   j["work_done"] = p.workDone;
+  j["pilot_work"] = p.pilotWork;
   j["planned_work"] = p.plannedWork;
   j["samples_per_second"] = p.samplesPerSecond;
   j["elapsed_seconds"] = p.elapsedSeconds;

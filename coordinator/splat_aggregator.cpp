@@ -34,6 +34,7 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
       chainGroup_(std::move(chainGroups)),
       nextFlush_(std::move(snapshot.nextFlush)),
       workDone_(snapshot.workDone),
+      priorWork_(snapshot.priorWork),
       rejected_(snapshot.rejected),
       rays_(snapshot.rays),
       acceptedFlushes_(snapshot.acceptedFlushes),
@@ -56,6 +57,10 @@ SplatAggregator::SplatAggregator(int width, int height, std::vector<uint32_t> ch
     if (g.size() != values)
       throw std::invalid_argument("a group's film in the snapshot holds " +
                                   std::to_string(g.size()) + " values, not " + film);
+  }
+  if (priorWork_ < 0 || priorWork_ > workDone_) {
+    throw std::invalid_argument("the snapshot's prior work " + std::to_string(priorWork_) +
+                                " is not within its work " + std::to_string(workDone_));
   }
   if (nextFlush_.empty()) nextFlush_.assign(chainGroup_.size(), 0);  // an ended job's counts
   if (nextFlush_.size() != chainGroup_.size()) {
@@ -82,12 +87,44 @@ SplatAggregator::Snapshot SplatAggregator::snapshot(bool withSums) const {
   s.groupWork = groupWork_;
   s.nextFlush = nextFlush_;
   s.workDone = workDone_;
+  s.priorWork = priorWork_;
   s.rejected = rejected_;
   s.rays = rays_;
   s.acceptedFlushes = acceptedFlushes_;
   s.tallies = tallies_;
   s.largeSteps = largeSteps_;
   return s;
+}
+
+void SplatAggregator::addPrior(const PilotSamples& prior) {
+  if (acceptedFlushes_ > 0 || workDone_ > 0)
+    throw std::logic_error("a prior joins the sums before any flush, and once");
+  const size_t values = filmValues();
+  if (prior.sums.size() != values)
+    throw std::invalid_argument("the prior's film holds " + std::to_string(prior.sums.size()) +
+                                " values, not " + std::to_string(values));
+  if (prior.groupSums.size() != prior.groupWork.size() || prior.groupWork.empty())
+    throw std::invalid_argument("the prior's groups and their work do not match");
+  int64_t work = 0;
+  for (size_t g = 0; g < prior.groupWork.size(); ++g) {
+    if (prior.groupSums[g].size() != values || prior.groupWork[g] < 0)
+      throw std::invalid_argument("the prior's group " + std::to_string(g) + " is not sound");
+    work += prior.groupWork[g];
+  }
+  if (work != prior.work || work <= 0)
+    throw std::invalid_argument("the prior's work " + std::to_string(prior.work) +
+                                " is not its groups' " + std::to_string(work));
+  for (size_t k = 0; k < values; ++k) sums_[k] += prior.sums[k];
+  const uint32_t groups = this->groups();
+  for (size_t g = 0; g < prior.groupWork.size(); ++g) {
+    const uint32_t into = uint32_t(g % groups);
+    groupWork_[into] += prior.groupWork[g];
+    if (groupSums_.empty()) continue;  // one group: its film is the image's
+    std::vector<float>& film = groupSums_[into];
+    for (size_t k = 0; k < values; ++k) film[k] += prior.groupSums[g][k];
+  }
+  workDone_ += work;
+  priorWork_ = work;
 }
 
 FlushBatch FlushBatch::of(ChainFlush flush, uint64_t epoch) {

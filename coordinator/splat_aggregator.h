@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "common/render/algorithm_pilot.h"
 #include "common/render/render_job.h"
 
 namespace farm {
@@ -54,6 +55,7 @@ class SplatAggregator {
     std::vector<int64_t> groupWork;             // per group (empty: one group, workDone)
     std::vector<uint32_t> nextFlush;            // per chain
     int64_t workDone = 0;
+    int64_t priorWork = 0;  // of workDone, the prior's (addPrior)
     InvalidSplats rejected;
     int64_t rays = 0;
     uint64_t acceptedFlushes = 0;
@@ -88,6 +90,13 @@ class SplatAggregator {
   // its chain (one entry a chain) and the film is sound; otherwise changes nothing and answers
   // the first entry's (or the film's) outcome that is not kAccepted.
   FlushOutcome addBatch(const FlushBatch& batch, std::string* problem = nullptr);
+  // Samples taken before the chains that estimate the same image, an allocation pilot's
+  // (common/render/algorithm_pilot.h): its film joins the image's, its group g the aggregator's
+  // group g mod groups() (the groups stay independent of each other, the pilot's streams being
+  // its own), and its counts the work, so that the image is the pooled estimate. Only before
+  // any flush (and once): std::logic_error otherwise; std::invalid_argument for a film of
+  // another size or counts that do not add up.
+  void addPrior(const PilotSamples& prior);
   // withSums false: the counts alone (what an ended job keeps), without copying the film.
   Snapshot snapshot(bool withSums = true) const;
 
@@ -98,6 +107,8 @@ class SplatAggregator {
   const std::vector<float>& groupSums(uint32_t group) const { return groupSums_.at(group); }
   int64_t groupWork(uint32_t group) const { return groupWork_.at(group); }
   int64_t workDone() const { return workDone_; }
+  // Of workDone(), the prior's: the chains' own work is the difference.
+  int64_t priorWork() const { return priorWork_; }
   const InvalidSplats& rejected() const { return rejected_; }
   int64_t rays() const { return rays_; }
   uint64_t acceptedFlushes() const { return acceptedFlushes_; }
@@ -122,6 +133,7 @@ class SplatAggregator {
   std::vector<int64_t> groupWork_;
   std::vector<uint32_t> nextFlush_;
   int64_t workDone_ = 0;
+  int64_t priorWork_ = 0;
   InvalidSplats rejected_;
   int64_t rays_ = 0;
   uint64_t acceptedFlushes_ = 0;

@@ -204,5 +204,62 @@ TEST(SplatAggregator, KeepsEachGroupsFilmBesideTheImage) {
   EXPECT_THROW(SplatAggregator(1, 1, {0, 1, 1}, wrong), std::invalid_argument);
 }
 
+// An allocation pilot's samples (PilotSamples) join the sums before any flush: the image's film
+// is the pilot's plus the flushes', the pilot's group g joins group g mod groups, the work
+// counts both and priorWork the pilot's, and a snapshot keeps the split. Once, before any flush.
+TEST(SplatAggregator, APriorJoinsTheSumsOnceBeforeAnyFlush) {
+  PilotSamples prior;
+  prior.groupWork = {10, 20, 30, 40};
+  prior.work = 100;
+  for (int g = 0; g < 4; ++g) prior.groupSums.push_back(std::vector<float>(3, 1.0f + g));
+  prior.sums = std::vector<double>(3, 1.0 + 2.0 + 3.0 + 4.0);
+  SplatAggregator sum(1, 1, std::vector<uint32_t>{0, 1});
+  sum.addPrior(prior);
+  EXPECT_EQ(sum.workDone(), 100);
+  EXPECT_EQ(sum.priorWork(), 100);
+  EXPECT_EQ(sum.acceptedFlushes(), 0u);
+  EXPECT_EQ(sum.groupWork(0), 10 + 30);
+  EXPECT_EQ(sum.groupWork(1), 20 + 40);
+  EXPECT_EQ(sum.groupSums(0), std::vector<float>(3, 1.0f + 3.0f));
+  EXPECT_EQ(sum.groupSums(1), std::vector<float>(3, 2.0f + 4.0f));
+  EXPECT_THROW(sum.addPrior(prior), std::logic_error) << "twice";
+  EXPECT_EQ(sum.add(makeFlush(1, 0, 0.5f, 1, 1)), FlushOutcome::kAccepted);
+  EXPECT_EQ(sum.sums(), std::vector<double>(3, 10.5));
+  EXPECT_EQ(sum.groupSums(1), std::vector<float>(3, 6.5f));
+  EXPECT_EQ(sum.workDone(), 200);
+  EXPECT_EQ(sum.groupWork(1), 160);
+  EXPECT_EQ(sum.priorWork(), 100) << "the chains' work is not the prior's";
+
+  // A restart reads the split back with the films (a checkpoint holds both or neither).
+  const SplatAggregator restored(1, 1, {0, 1}, sum.snapshot());
+  EXPECT_EQ(restored.priorWork(), 100);
+  EXPECT_EQ(restored.workDone(), 200);
+  EXPECT_EQ(restored.sums(), sum.sums());
+  SplatAggregator::Snapshot inconsistent = sum.snapshot();
+  inconsistent.priorWork = 201;
+  EXPECT_THROW(SplatAggregator(1, 1, {0, 1}, inconsistent), std::invalid_argument);
+
+  // After a flush it would count a second time in a restored job: refused.
+  SplatAggregator late(1, 1, std::vector<uint32_t>{0, 1});
+  EXPECT_EQ(late.add(makeFlush(0, 0, 1.0f, 1, 1)), FlushOutcome::kAccepted);
+  EXPECT_THROW(late.addPrior(prior), std::logic_error);
+  // One group: the pilot's groups all join the image's film, which is that group's.
+  SplatAggregator one(1, 1, 2);
+  one.addPrior(prior);
+  EXPECT_EQ(one.groupWork(0), 100);
+  EXPECT_EQ(one.sums(), std::vector<double>(3, 10.0));
+  // Counts that do not add up, or a film of another size, change nothing.
+  for (int broken = 0; broken < 3; ++broken) {
+    PilotSamples bad = prior;
+    if (broken == 0) bad.work = 99;
+    if (broken == 1) bad.sums.pop_back();
+    if (broken == 2) bad.groupSums[3].push_back(0);
+    SplatAggregator fresh(1, 1, std::vector<uint32_t>{0, 1});
+    EXPECT_THROW(fresh.addPrior(bad), std::invalid_argument) << broken;
+    EXPECT_EQ(fresh.workDone(), 0) << broken;
+    EXPECT_EQ(fresh.sums(), std::vector<double>(3, 0.0)) << broken;
+  }
+}
+
 }  // namespace
 }  // namespace farm

@@ -246,6 +246,7 @@ std::string encodeCheckpoint(const SplatAggregator::Snapshot& s,
   r.set_sums_file(sumsFile);
   r.set_sums_layout(1);
   r.set_work_done(s.workDone);
+  r.set_prior_work(s.priorWork);
   r.set_rejected_nan(s.rejected.nan);
   r.set_rejected_infinite(s.rejected.infinite);
   r.set_rejected_negative(s.rejected.negative);
@@ -333,6 +334,7 @@ bool decodeCheckpoint(const std::string& bytes, size_t values, uint32_t groups,
     }
   }
   s->workDone = r.work_done();
+  s->priorWork = r.prior_work();
   s->rejected.nan = r.rejected_nan();
   s->rejected.infinite = r.rejected_infinite();
   s->rejected.negative = r.rejected_negative();

@@ -167,7 +167,9 @@ TEST(StoreRecords, ACheckpointsFilmsComeBackAsTheyWereHeld) {
   const SplatAggregator sums = twoGroupSums();
   const std::string dir = ::testing::TempDir();
   std::ofstream(dir + "/films.sums", std::ios::binary) << store::encodeFilms(sums);
-  const std::string record = store::encodeCheckpoint(sums.snapshot(false), {}, "films.sums");
+  SplatAggregator::Snapshot counts = sums.snapshot(false);
+  counts.priorWork = 5;  // as if an allocation pilot's 5 samples were among the 42
+  const std::string record = store::encodeCheckpoint(counts, {}, "films.sums");
   SplatAggregator::Snapshot back;
   std::vector<ChainScheduler::ChainSnapshot> chains;
   std::string file, error;
@@ -183,6 +185,7 @@ TEST(StoreRecords, ACheckpointsFilmsComeBackAsTheyWereHeld) {
   EXPECT_EQ(restored.sums(), sums.sums());
   EXPECT_EQ(restored.groupSums(1), sums.groupSums(1));
   EXPECT_EQ(restored.workDone(), 42);
+  EXPECT_EQ(restored.priorWork(), 5) << "the pilot's share of the work";
 
   // Films that do not fit the job (a group's frame missing, or a film of another size) say so.
   for (const auto& [values, groups] : {std::pair<size_t, uint32_t>{6, 3}, {9, 2}}) {

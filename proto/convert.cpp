@@ -82,7 +82,7 @@ bool fromProto(v1::Algorithm algorithm, Algorithm* out, std::string* error) {
   return false;
 }
 
-v1::RenderSettings toProto(const RenderSettings& settings) {
+v1::RenderSettings toProto(const RenderSettings& settings, WithAllocation allocation) {
   v1::RenderSettings m;
   m.set_algorithm(toProto(settings.algorithm));
   m.set_width(settings.width);
@@ -107,7 +107,8 @@ v1::RenderSettings toProto(const RenderSettings& settings) {
   m.set_pilot(settings.pilot);
   m.set_combine_large_steps(settings.combineLargeSteps);
   m.set_ignore_plan(settings.ignorePlan);
-  if (settings.pixelAllocation) m.set_pixel_allocation(settings.pixelAllocation->encode());
+  if (settings.pixelAllocation && allocation == WithAllocation::kIncluded)
+    m.set_pixel_allocation(settings.pixelAllocation->encode());
   m.set_shading_normals(
       settings.shadingNormals == ShadingNormals::Strict ? v1::SHADING_NORMALS_STRICT
       : settings.shadingNormals == ShadingNormals::Lax  ? v1::SHADING_NORMALS_LAX
@@ -383,6 +384,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   m->set_error(p.error);
   m->set_fraction(p.fraction);
   m->set_work_done(p.workDone);
+  m->set_pilot_work(p.pilotWork);
   m->set_planned_work(p.plannedWork);
   m->set_samples_per_second(p.samplesPerSecond);
   m->set_elapsed_seconds(p.elapsedSeconds);
@@ -417,11 +419,7 @@ void toProto(const JobProgress& p, v1::JobProgress* m) {
   for (const std::string& w : p.setAside) m->add_set_aside(w);
   m->set_width(p.width);
   m->set_height(p.height);
-  // A poll has no use for the pixel allocation (the render plan's lines say what it did), and
-  // it would fill every answer: left out before it is encoded.
-  RenderSettings settings = p.settings;
-  settings.pixelAllocation.reset();
-  *m->mutable_settings() = toProto(settings);
+  *m->mutable_settings() = toProto(p.settings, WithAllocation::kLeftOut);
   m->set_name(p.name);
   m->set_render_seconds(p.renderSeconds);
   m->set_load_seconds(p.loadSeconds);
@@ -439,6 +437,7 @@ void fromProto(const v1::JobProgress& m, JobProgress* p) {
   p->elapsedSeconds = m.elapsed_seconds();
   p->etaSeconds = m.eta_seconds();
   p->workDone = m.work_done();
+  p->pilotWork = m.pilot_work();
   p->plannedWork = m.planned_work();
   p->rejected.nan = m.rejected_nan();
   p->rejected.infinite = m.rejected_infinite();

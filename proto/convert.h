@@ -17,7 +17,12 @@ v1::Algorithm toProto(Algorithm algorithm);
 // False (with *error) for ALGORITHM_UNSPECIFIED or a value this build does not know.
 bool fromProto(v1::Algorithm algorithm, Algorithm* out, std::string* error);
 
-v1::RenderSettings toProto(const RenderSettings& settings);
+// kLeftOut: without the pixel allocation, for messages that never use it (a lease's settings,
+// whose work units name it by hash; a progress poll, whose plan lines say what it did), so that
+// it is neither encoded nor sent.
+enum class WithAllocation { kIncluded, kLeftOut };
+v1::RenderSettings toProto(const RenderSettings& settings,
+                           WithAllocation allocation = WithAllocation::kIncluded);
 // Converts only; the caller still runs RenderSettings::validate().
 bool fromProto(const v1::RenderSettings& message, RenderSettings* out, std::string* error);
 

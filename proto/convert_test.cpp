@@ -43,6 +43,7 @@ TEST(Convert, EveryFieldOfAJobsProgressCrossesTheWireAndBack) {
   p.elapsedSeconds = 3;
   p.etaSeconds = 9;
   p.workDone = 100;
+  p.pilotWork = 30;
   p.plannedWork = 400;
   p.rejected.nan = 1;
   p.rejected.infinite = 2;
@@ -136,6 +137,7 @@ TEST(Convert, PixelAllocationCrossesTheWire) {
   ASSERT_TRUE(fromProto(toProto(settings), &back, &error)) << error;
   ASSERT_TRUE(back.pixelAllocation);
   EXPECT_EQ(back.pixelAllocation->encode(), allocation->encode());
+  EXPECT_TRUE(toProto(settings, WithAllocation::kLeftOut).pixel_allocation().empty());
 
   ChainSpec spec;
   spec.algorithm = Algorithm::PathTracing;

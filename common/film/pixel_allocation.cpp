@@ -162,11 +162,14 @@ PixelAllocation::PixelAllocation(int width, int height, int cellSize, std::vecto
   cameraWeight_.resize(cells);
   const double filmArea = double(width) * height;
   double bidirectionalShare = 0;
+  concentration_ = 0;
   for (size_t c = 0; c < cells; ++c) {
     const double probability = double(grid[c] - (c == 0 ? 0 : grid[c - 1])) / kGrid;
     cdf_[c] = double(grid[c]) / kGrid;
     cameraWeight_[c] = float(area[c] / (filmArea * probability));
     if (bidirectional_[c]) bidirectionalShare += probability;
+    // a_c / A of r_c^2, r_c = A P_c / a_c
+    concentration_ += filmArea * probability * probability / area[c];
   }
   lightTracingWeight_ = bidirectionalShare > 0 ? 1 / bidirectionalShare : 0;
 }

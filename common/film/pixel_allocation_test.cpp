@@ -40,6 +40,13 @@ TEST(PixelAllocation, WeightsAreTheUniformFilmsDensityOverTheCells) {
   }
   // F_B = (2*4 + 0.5*2 + 1*2) / 26, to the grid of 2^-24 the cells' probabilities are on
   EXPECT_NEAR(a.lightTracingWeight(), 26.0 / 11.0, 26.0 / 11.0 * 0x1p-24 / (11.0 / 26.0) * 6);
+  // r_c = 15 d_c / 26 over the film's 15 pixels: sum a_c r_c^2 / 15
+  double concentration = 0;
+  const double area[] = {4, 4, 2, 2, 2, 1};
+  for (int c = 0; c < 6; ++c) concentration += area[c] * std::pow(film * d[c] / total, 2) / film;
+  EXPECT_NEAR(a.concentration(), concentration, 1e-5);
+  const PixelAllocation uniform(5, 3, 2, std::vector<float>(6, 2.0f), std::vector<uint8_t>(6, 0));
+  EXPECT_NEAR(uniform.concentration(), 1.0, 1e-6);
 }
 
 // Drawn many times, each cell is picked with probability d_c a_c / sum d a and its points stay

@@ -30,20 +30,29 @@ double since(Clock::time_point t) {
 constexpr int kPilotGroups = 4;
 constexpr int kPilotMaxChains = 64;
 
+// Each chain group's film as summed (before resolve) and its samples.
+struct GroupFilms {
+  std::vector<std::vector<double>> sums;
+  std::vector<int64_t> work;
+};
+
 // *image: the candidate's image, for the cross estimate (runPilot); *groupImages, when given,
-// each chain group's (for a pixel allocation).
+// each chain group's (for a pixel allocation); *films, when given, their films and counts.
+// `groups`: its chain groups (at least 2, at most kPilotMaxChains).
 PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings, double seconds,
                      const std::function<bool()>& keepGoing, Image* image,
-                     std::vector<Image>* groupImages = nullptr) {
+                     std::vector<Image>* groupImages = nullptr, GroupFilms* films = nullptr,
+                     int groups = kPilotGroups) {
   PilotFigure figure;
   figure.algorithm = settings.algorithm;
   settings.autoAlgorithm = false;
   settings.pilot = false;
   settings.timeBudgetSeconds = seconds;
   settings.untilError = 0;
-  settings.errorGroups = kPilotGroups;
+  groups = std::clamp(groups, 2, kPilotMaxChains);
+  settings.errorGroups = groups;
   settings.numChains = std::clamp(settings.numChains > 0 ? settings.numChains : kPilotMaxChains,
-                                  kPilotGroups, kPilotMaxChains);
+                                  groups, kPilotMaxChains);
   settings.bootstrapSamples = 0;
   // Flush often: the deadline is looked at only between flushes.
   settings.flushInterval = 1024;
@@ -55,7 +64,6 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
     figure.bootstrapSeconds = since(start);
     std::vector<ChainSpec> specs = job.planChains(bootstrap);
     const size_t size = size_t(job.width()) * job.height() * 3;
-    const int groups = kPilotGroups;  // planChains: min(errorGroups, chains) of them
     std::vector<std::vector<double>> sums(groups, std::vector<double>(size, 0.0));
     std::vector<int64_t> work(groups, 0);
     LargeStepSums largeSteps;
@@ -109,6 +117,10 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
     figure.estimatedRelMse = estimate.relMse;
     figure.score = estimate.relMse * figure.seconds;
     if (groupImages) *groupImages = std::move(images);
+    if (films) {
+      films->sums = std::move(sums);
+      films->work = std::move(work);
+    }
   } catch (const std::exception& e) {
     figure.estimatedRelMse = -1;
     figure.score = -1;
@@ -117,7 +129,57 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
   return figure;
 }
 
+// The allocation pilot's groups from `first` on, as the job's samples to keep, if
+// pooledErrorRatio says they lower its error at the concentration of an allocation made from
+// the groups before `first` alone (so that the decision does not select the kept samples by
+// their own values); the job's count n_j at the pilot's rate over the rest of the budget.
+void keepPilotSamples(GroupFilms& films, size_t first, double concentration,
+                      const RenderSettings& settings, const PilotFigure& figure,
+                      PilotSamples* samples, std::string* why) {
+  *samples = PilotSamples();
+  int64_t all = 0, kept = 0;
+  for (size_t g = 0; g < films.work.size(); ++g) {
+    all += films.work[g];
+    if (g >= first) kept += films.work[g];
+  }
+  const double rest = settings.timeBudgetSeconds - figure.bootstrapSeconds - figure.seconds;
+  const double jobSamples = figure.seconds > 0 ? double(all) / figure.seconds * rest : 0;
+  const double np = double(kept), nj = std::max(jobSamples, 0.0);
+  const double ratio = pooledErrorRatio(np, nj, concentration);
+  char text[200];
+  if (kept <= 0 || !(ratio < 1)) {
+    std::snprintf(text, sizeof text,
+                  "; its samples stay out of the image (beside the job's %.3g allocated ones they "
+                  "would leave %.2f times the error)",
+                  nj, ratio);
+    *why += text;
+    return;
+  }
+  const size_t values = films.sums.empty() ? 0 : films.sums.front().size();
+  samples->sums.assign(values, 0.0);
+  for (size_t g = first; g < films.sums.size(); ++g) {
+    for (size_t k = 0; k < values; ++k) samples->sums[k] += films.sums[g][k];
+    // Float, as the aggregator keeps its groups' films (splat_aggregator.h).
+    samples->groupSums.emplace_back(films.sums[g].begin(), films.sums[g].end());
+    std::vector<double>().swap(films.sums[g]);
+    samples->groupWork.push_back(films.work[g]);
+  }
+  samples->work = kept;
+  samples->seconds = figure.seconds;
+  samples->seed = settings.seed;
+  std::snprintf(text, sizeof text,
+                "; half of its samples (%lld) join the image (beside the job's %.3g allocated "
+                "ones, %.2f times the error of the job's alone)",
+                (long long)kept, nj, ratio);
+  *why += text;
+}
+
 }  // namespace
+
+double pooledErrorRatio(double pilotSamples, double jobSamples, double concentration) {
+  const double n = pilotSamples + jobSamples;
+  return n > 0 ? jobSamples * (pilotSamples * concentration + jobSamples) / (n * n) : 1.0;
+}
 
 double pilotSecondsEach(const RenderSettings& settings, size_t candidates) {
   if (candidates == 0) return 0;
@@ -173,7 +235,8 @@ double allocationPilotSeconds(const RenderSettings& settings) {
 std::shared_ptr<const PixelAllocation> allocationPilot(std::shared_ptr<const Scene> scene,
                                                        RenderSettings settings, double seconds,
                                                        const std::function<bool()>& keepGoing,
-                                                       std::string* why) {
+                                                       std::string* why, PilotSamples* samples) {
+  if (samples) *samples = PilotSamples();
   if (settings.algorithm != Algorithm::PathTracing &&
       settings.algorithm != Algorithm::Bidirectional) {
     throw std::invalid_argument("a pixel allocation places independent samples: pt or bdpt");
@@ -184,20 +247,40 @@ std::shared_ptr<const PixelAllocation> allocationPilot(std::shared_ptr<const Sce
   settings.pixelAllocation.reset();
   Image image;
   std::vector<Image> groups;
-  const PilotFigure figure = pilotOne(scene, settings, seconds, keepGoing, &image, &groups);
-  if (figure.score < 0 || groups.size() < 2) {
+  GroupFilms films;
+  // Twice the job's group count. All of them place the samples; the second half is what the
+  // job may keep (PilotSamples), one group to each of the job's (SplatAggregator::addPrior), so
+  // that every group of the job mixes the pilot's samples and the chains' alike. The pooled
+  // image (S_p + S_j) / (n_p + n_j) is unbiased for any allocation, the one its samples helped
+  // make too; a decision to keep them made from their own values would not be (kept where
+  // they happened to look even), so it is made from the first half.
+  const int jobGroups = std::max(settings.errorGroups > 0 ? settings.errorGroups : kErrorGroups, 2);
+  const int pilotGroups = std::min(2 * jobGroups, kPilotMaxChains);
+  const PilotFigure figure = pilotOne(scene, settings, seconds, keepGoing, &image, &groups,
+                                      samples ? &films : nullptr, pilotGroups);
+  if (figure.score < 0 || groups.size() < 4) {
     *why = "no pixel allocation: its pilot failed (" + figure.failure + ")";
     return nullptr;
   }
-  auto allocation = std::make_shared<const PixelAllocation>(
-      PixelAllocation::byError(groups, settings.algorithm == Algorithm::Bidirectional));
+  const bool bidirectional = settings.algorithm == Algorithm::Bidirectional;
+  auto allocation =
+      std::make_shared<const PixelAllocation>(PixelAllocation::byError(groups, bidirectional));
   const auto [lo, hi] =
       std::minmax_element(allocation->density().begin(), allocation->density().end());
-  char text[160];
+  char text[320];
   std::snprintf(text, sizeof text,
-                "a pilot of %.1f s placed the samples by its error (densities %.2g to %.2g)",
-                figure.seconds, double(*lo), double(*hi));
+                "a pilot of %.1f s placed the samples by its error (densities %.2g to %.2g, "
+                "%.2g times less error than uniform sampling where the error goes as the density "
+                "squared)",
+                figure.seconds, double(*lo), double(*hi), allocation->concentration());
   *why = text;
+  if (samples) {
+    // Whether to keep the second half rests on the first half's allocation alone.
+    const size_t half = groups.size() / 2;
+    groups.resize(half);
+    const double concentration = PixelAllocation::byError(groups, bidirectional).concentration();
+    keepPilotSamples(films, half, concentration, settings, figure, samples, why);
+  }
   return allocation;
 }
 
@@ -211,7 +294,8 @@ Algorithm pilotPick(Algorithm first, const std::vector<PilotFigure>& figures) {
 }
 
 RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
-                   const std::function<bool()>& keepGoing) {
+                   const std::function<bool()>& keepGoing, PilotSamples* pilotSamples) {
+  if (pilotSamples) *pilotSamples = PilotSamples();
   const SceneAnalysis analysis = analyseScene(*scene);
   RenderPlan plan = planRender(analysis, settings->algorithm, settings->autoAlgorithm,
                                settings->mutationMix, settings->numChains);
@@ -258,7 +342,8 @@ RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
     if (settings->algorithm == Algorithm::Bidirectional && !settings->pixelAllocation) {
       if (const double seconds = allocationPilotSeconds(*settings); seconds > 0) {
         std::string why;
-        settings->pixelAllocation = allocationPilot(scene, *settings, seconds, keepGoing, &why);
+        settings->pixelAllocation =
+            allocationPilot(scene, *settings, seconds, keepGoing, &why, pilotSamples);
         if (keepGoing && !keepGoing()) throw std::runtime_error("cancelled");
         plan.why += "; " + why;
       }

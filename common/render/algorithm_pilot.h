@@ -66,13 +66,41 @@ static_assert(kAllocationSeedSalt % 2 == 1, "the salt must be odd");
 // The allocation pilot's seconds for these settings; 0: none.
 double allocationPilotSeconds(const RenderSettings& settings);
 
+// The allocation pilot's samples, kept for the job's image (coordinator/job.cpp,
+// SplatAggregator::addPrior). They are the job's algorithm sampled uniformly over the film under
+// a seed of their own, and so an unbiased estimate of the image the job's allocated samples
+// estimate (each allocated splat carries 1 / its density, common/film/pixel_allocation.h): the
+// pooled (pilot's splats + job's splats) / (pilot's samples + job's samples) is unbiased too,
+// and the pilot's share of the budget is not lost.
+struct PilotSamples {
+  std::vector<double> sums;                   // the film, width*height*3, every group's
+  std::vector<std::vector<float>> groupSums;  // each of the pilot's error groups' film
+  std::vector<int64_t> groupWork;             // samples, per group
+  int64_t work = 0;                           // samples, all groups
+  double seconds = 0;
+  uint64_t seed = 0;  // the pilot's (the job's ^ kAllocationSeedSalt)
+};
+
+// The relative MSE of n_p uniform samples pooled with n_j allocated ones, (S_p + S_j) / n,
+// over that of the n_j alone, for an allocation of concentration K
+// (PixelAllocation::concentration): a pixel's error per uniform sample e becomes
+// e (n_p + n_j / r) / n^2 against e / (n_j r), r its relative density, and over the film with
+// e ~ r^2 their ratio is n_j (n_p K + n_j) / n^2. Under 1 where the allocation is mild; over it
+// where the allocation gathers the samples, K above about 2 + n_p / n_j (light through glass,
+// where the allocated samples are several times better spent than uniform ones).
+double pooledErrorRatio(double pilotSamples, double jobSamples, double concentration);
+
 // Renders settings.algorithm (pt or bdpt) for `seconds` under a seed of its own and returns the
 // allocation its error asks for, with *why saying what it did; nullptr (and *why saying so)
-// when the pilot failed.
+// when the pilot failed. The pilot renders twice the job's error groups, which all place the
+// samples; with `samples`, the second half goes there for the job's image when
+// pooledErrorRatio, at the concentration of the first half's allocation, is under 1
+// (otherwise, and on failure, it is left empty).
 std::shared_ptr<const PixelAllocation> allocationPilot(std::shared_ptr<const Scene> scene,
                                                        RenderSettings settings, double seconds,
                                                        const std::function<bool()>& keepGoing,
-                                                       std::string* why);
+                                                       std::string* why,
+                                                       PilotSamples* samples = nullptr);
 
 // What the pilot's figures (best score first) pick: the plan's first candidate, unless it
 // failed or another's score is under its own over kPilotMargin.
@@ -81,7 +109,10 @@ Algorithm pilotPick(Algorithm first, const std::vector<PilotFigure>& figures);
 // The job's plan, applied to *settings: with settings->autoAlgorithm the algorithm the plan
 // (and with settings->pilot its pilot, where it has more than one candidate) picks; unless
 // settings->ignorePlan, mlt's mutation mix with the parts the scene does not need at zero weight.
+// With `pilotSamples`, an allocation pilot's samples go there for the job's image (work 0: none;
+// the ranking pilot's are not kept, as they share the job's seed).
 RenderPlan planJob(std::shared_ptr<const Scene> scene, RenderSettings* settings,
-                   const std::function<bool()>& keepGoing = {});
+                   const std::function<bool()>& keepGoing = {},
+                   PilotSamples* pilotSamples = nullptr);
 
 }  // namespace farm

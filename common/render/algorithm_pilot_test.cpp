@@ -220,7 +220,8 @@ TEST(PlanJob, AutoPlacesBidirectionalSamplesByAPilotsError) {
   settings.autoAlgorithm = true;
   settings.width = settings.height = 32;
   settings.timeBudgetSeconds = 6;
-  const RenderPlan plan = planJob(scene, &settings);
+  PilotSamples samples;
+  const RenderPlan plan = planJob(scene, &settings, {}, &samples);
   ASSERT_EQ(settings.algorithm, Algorithm::Bidirectional) << plan.why;
   ASSERT_TRUE(settings.pixelAllocation);
   EXPECT_EQ(settings.pixelAllocation->width(), 32);
@@ -231,19 +232,50 @@ TEST(PlanJob, AutoPlacesBidirectionalSamplesByAPilotsError) {
   EXPECT_NE(plan.why.find("s placed the samples by its error (densities "), std::string::npos)
       << plan.why;
   EXPECT_TRUE(settings.validate().empty()) << settings.validate();
+  // Half of its samples, for the job's image (coordinator/job.cpp): under a seed of their own,
+  // one group for each of the job's four, and their film the sum of their groups'. Here the
+  // allocation is mild (densities within 10x), so they lower the error.
+  EXPECT_NE(plan.why.find("half of its samples ("), std::string::npos) << plan.why;
+  EXPECT_EQ(samples.seed, settings.seed ^ kAllocationSeedSalt);
+  EXPECT_NE(samples.seed, settings.seed);
+  ASSERT_EQ(samples.groupSums.size(), 4u);
+  ASSERT_EQ(samples.groupWork.size(), 4u);
+  ASSERT_EQ(samples.sums.size(), size_t(32 * 32 * 3));
+  int64_t work = 0;
+  for (int64_t w : samples.groupWork) work += w;
+  EXPECT_EQ(samples.work, work);
+  EXPECT_GT(samples.work, 0);
+  double total = 0, groups = 0;
+  for (double v : samples.sums) total += v;
+  for (const std::vector<float>& g : samples.groupSums)
+    for (double v : g) groups += v;
+  EXPECT_GT(total, 0);
+  EXPECT_NEAR(total, groups, 1e-5 * total);  // the groups' films are float
 
   RenderSettings counts;
   counts.autoAlgorithm = true;
   counts.width = counts.height = 32;
-  planJob(scene, &counts);
+  planJob(scene, &counts, {}, &samples);
   EXPECT_EQ(counts.algorithm, Algorithm::Bidirectional);
   EXPECT_FALSE(counts.pixelAllocation);
+  EXPECT_EQ(samples.work, 0) << "no pilot, no samples of one";
   RenderSettings brief = counts;
   brief.autoAlgorithm = true;
   brief.timeBudgetSeconds = 4;  // 0.4 s, under kAllocationMinSeconds
   planJob(scene, &brief);
   EXPECT_FALSE(brief.pixelAllocation);
   EXPECT_DOUBLE_EQ(allocationPilotSeconds(settings), 0.6);
+}
+
+// Pooling uniform samples with allocated ones (n_j (n_p K + n_j) / n^2): even at K = 1, a gain
+// of the pilot's share, up to no gain at K = 2 + n_p / n_j, a loss above.
+TEST(PlanJob, UniformSamplesJoinAnAllocatedImageOnlyWhereTheyLowerItsError) {
+  EXPECT_NEAR(pooledErrorRatio(1, 9, 1.0), 0.9, 1e-12) << "uniform: a tenth more samples";
+  EXPECT_NEAR(pooledErrorRatio(1, 9, 2.0 + 1.0 / 9), 1.0, 1e-12);
+  EXPECT_LT(pooledErrorRatio(1, 9, 1.5), 1.0);
+  EXPECT_NEAR(pooledErrorRatio(1, 9, 5.0), 1.26, 1e-12) << "light through glass";
+  EXPECT_DOUBLE_EQ(pooledErrorRatio(1, 0, 5.0), 0.0) << "no job samples: the pilot's alone";
+  EXPECT_DOUBLE_EQ(pooledErrorRatio(0, 0, 1.0), 1.0);
 }
 
 TEST(PlanJob, PilotSecondsAreAShareOfTheBudget) {

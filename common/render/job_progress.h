@@ -28,6 +28,7 @@ struct JobProgress {
   JobPhase phase = JobPhase::kSubmitted;
   double fraction = 0, samplesPerSecond = 0, elapsedSeconds = 0, etaSeconds = -1;
   int64_t workDone = 0, plannedWork = 0;
+  int64_t pilotWork = 0;                // of workDone, an allocation pilot's samples (kept)
   InvalidSplats rejected;               // splats dropped at the source, by cause
   int64_t rays = 0;                     // traced for the accepted work
   std::vector<MutationTally> tallies;   // proposals and acceptances by kind (Markov chains)
