@@ -136,7 +136,7 @@ PilotFigure pilotOne(std::shared_ptr<const Scene> scene, RenderSettings settings
 void keepPilotSamples(GroupFilms& films, size_t first, double concentration,
                       const RenderSettings& settings, const PilotFigure& figure,
                       PilotSamples* samples, std::string* why) {
-  *samples = PilotSamples();
+  // *samples is empty: allocationPilot cleared it.
   int64_t all = 0, kept = 0;
   for (size_t g = 0; g < films.work.size(); ++g) {
     all += films.work[g];
@@ -165,7 +165,6 @@ void keepPilotSamples(GroupFilms& films, size_t first, double concentration,
     samples->groupWork.push_back(films.work[g]);
   }
   samples->work = kept;
-  samples->seconds = figure.seconds;
   samples->seed = settings.seed;
   std::snprintf(text, sizeof text,
                 "; half of its samples (%lld) join the image (beside the job's %.3g allocated "

@@ -77,8 +77,7 @@ struct PilotSamples {
   std::vector<std::vector<float>> groupSums;  // each of the pilot's error groups' film
   std::vector<int64_t> groupWork;             // samples, per group
   int64_t work = 0;                           // samples, all groups
-  double seconds = 0;
-  uint64_t seed = 0;  // the pilot's (the job's ^ kAllocationSeedSalt)
+  uint64_t seed = 0;                          // the pilot's (the job's ^ kAllocationSeedSalt)
 };
 
 // The relative MSE of n_p uniform samples pooled with n_j allocated ones, (S_p + S_j) / n,
