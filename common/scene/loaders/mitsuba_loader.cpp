@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "common/scene/loaders/grid_volume_reader.h"
+#include "common/scene/loaders/light_builders.h"
+#include "common/scene/loaders/material_builders.h"
 #include "common/scene/loaders/mitsuba_document.h"
 #include "common/scene/loaders/mitsuba_properties.h"
 #include "common/scene/loaders/ply_reader.h"
@@ -30,10 +32,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kPiDouble = 3.14159265358979323846;
-
-// Copper, Mitsuba's default conductor, as RGB (the values its exporter writes for "Cu").
-const Spectrum kCopperEta{0.200438f, 0.924033f, 1.10221f};
-const Spectrum kCopperK{3.91295f, 2.45285f, 2.14219f};
 
 class MitsubaLoader {
  public:
@@ -243,9 +241,9 @@ class MitsubaLoader {
   }
 
   // intIOR and extIOR of a (rough) dielectric.
-  void parseDielectricIndex(MitsubaProperties& props, BsdfDescription* b, const std::string& type) {
-    b->intIOR = float(props.getIor("intIOR", 1.5046));
-    b->extIOR = float(props.getIor("extIOR", 1.000277));
+  std::pair<float, float> parseDielectricIndex(MitsubaProperties& props, const std::string& type) {
+    const float intIOR = float(props.getIor("intIOR", 1.5046));
+    const float extIOR = float(props.getIor("extIOR", 1.000277));
     // The description has no slot for tinted glass: accept only Mitsuba's default of 1.
     for (const char* name : {"specularReflectance", "specularTransmittance"}) {
       pugi::xml_node n = props.take(name);
@@ -253,16 +251,19 @@ class MitsubaLoader {
           !(doc_.spectrumOf(n).x == 1 && doc_.spectrumOf(n).y == 1 && doc_.spectrumOf(n).z == 1))
         doc_.fail(n, std::string(name) + " other than 1 is not supported for " + type);
     }
+    return {intIOR, extIOR};
   }
 
-  // The microfacet distribution and its roughness, of roughconductor and roughdielectric.
-  void parseRoughness(const pugi::xml_node& node, MitsubaProperties& props, BsdfDescription* b) {
+  // The microfacet distribution and its roughness, of roughconductor, roughdielectric and
+  // roughplastic.
+  Roughness parseRoughness(const pugi::xml_node& node, MitsubaProperties& props) {
+    Roughness r;
     pugi::xml_node distNode;
     std::string dist = toLower(props.getString("distribution", "beckmann", &distNode));
     if (dist == "beckmann") {
-      b->distribution = MicrofacetDistribution::Beckmann;
+      r.distribution = MicrofacetDistribution::Beckmann;
     } else if (dist == "ggx") {
-      b->distribution = MicrofacetDistribution::GGX;
+      r.distribution = MicrofacetDistribution::GGX;
     } else {
       doc_.fail(distNode, "unsupported microfacet distribution '" + dist + "' (beckmann or ggx)");
     }
@@ -286,53 +287,53 @@ class MitsubaLoader {
     if (!(alpha > 0))
       doc_.fail(alphaNode ? alphaNode : (alphaU ? alphaU : node), "alpha must be > 0");
     // Below 1e-4 the microfacet distributions lose precision; such a surface is a mirror anyway.
-    b->alpha = float(std::max(alpha, 1e-4));
+    r.alpha = float(std::max(alpha, 1e-4));
     props.take("sampleVisible");  // a sampling choice, not a look
+    return r;
   }
 
   // Mitsuba's plastic and roughplastic: a diffuse base under a dielectric coat
-  // (bsdfs/coated_diffuse.h's CoatedDiffuseBsdf). The smooth plastic's coat becomes a microfacet
-  // coat of alpha 1e-4, which the stability suite shows renders as the smooth one does except that
-  // it reflects point lights.
-  void parseCoatedDiffuse(const pugi::xml_node& node, MitsubaProperties& props,
-                          const std::string& type, BsdfDescription* b) {
-    b->type = BsdfDescription::Type::CoatedDiffuse;
+  // (coatedDiffuseMaterial), of the diffuse `texture` if >= 0.
+  BsdfDescription parseCoatedDiffuse(const pugi::xml_node& node, MitsubaProperties& props,
+                                     const std::string& type, int texture) {
+    Roughness roughness;  // smooth: coatedDiffuseMaterial's coat of kSmoothCoatAlpha
     if (type == "roughplastic") {
-      parseRoughness(node, props, b);
+      roughness = parseRoughness(node, props);
     } else {
-      b->distribution = MicrofacetDistribution::GGX;
-      b->alpha = 1e-4f;
       scene_.warnings.push_back(
           doc_.origin(node) +
           ": plastic: its smooth coat is rendered as a microfacet coat of roughness 1e-4 (the same "
           "image, except that point lights leave a tiny highlight)");
     }
-    b->intIOR = float(props.getIor("intIOR", 1.49));  // polypropylene
-    b->extIOR = float(props.getIor("extIOR", 1.000277));
-    b->nonlinear = props.getBoolean("nonlinear", false);
-    b->specularReflectance = props.getSpectrum("specularReflectance", Spectrum(1.0f));
-    b->reflectance = props.getSpectrum("diffuseReflectance", Spectrum(0.5f));
-    finishCoatedDiffuse(doc_.path(), doc_.lineOf(node), type, b);
+    const float intIOR = float(props.getIor("intIOR", 1.49));  // polypropylene
+    const float extIOR = float(props.getIor("extIOR", 1.000277));
+    const bool nonlinear = props.getBoolean("nonlinear", false);
+    const Spectrum specular = props.getSpectrum("specularReflectance", Spectrum(1.0f));
+    const Spectrum reflectance = props.getSpectrum("diffuseReflectance", Spectrum(0.5f));
+    return coatedDiffuseMaterial(reflectance, texture, specular, roughness, intIOR, extIOR,
+                                 nonlinear, doc_.path(), doc_.lineOf(node), type);
   }
 
-  // The complex index of refraction of a (rough) conductor, and its reflectance scale.
-  void parseConductorIndex(MitsubaProperties& props, BsdfDescription* b) {
+  // A (rough) conductor: its complex index of refraction and its reflectance scale.
+  BsdfDescription parseConductor(MitsubaProperties& props, const Roughness& roughness) {
     pugi::xml_node materialNode;
     std::string material = props.getString("material", "Cu", &materialNode);
+    Spectrum eta, k;
     if (material == "Cu") {
-      b->eta = kCopperEta;
-      b->k = kCopperK;
+      eta = mitsubaCopper().eta;
+      k = mitsubaCopper().k;
     } else if (toLower(material) == "none") {
-      b->eta = Spectrum(0.0f);
-      b->k = Spectrum(1.0f);
+      eta = Spectrum(0.0f);
+      k = Spectrum(1.0f);
     } else {
       doc_.fail(materialNode, "conductor material '" + material +
                                   "' is not supported; give eta and k as <rgb> (or Cu, none)");
     }
-    b->eta = props.getSpectrum("eta", b->eta);
-    b->k = props.getSpectrum("k", b->k);
-    b->extEta = float(props.getIor("extEta", 1.0));
-    b->specularReflectance = props.getSpectrum("specularReflectance", Spectrum(1.0f));
+    eta = props.getSpectrum("eta", eta);
+    k = props.getSpectrum("k", k);
+    const float extEta = float(props.getIor("extEta", 1.0));
+    const Spectrum scale = props.getSpectrum("specularReflectance", Spectrum(1.0f));
+    return conductorMaterial(eta, k, extEta, scale, roughness);
   }
 
   BsdfDescription parseBsdf(const pugi::xml_node& node) {
@@ -340,7 +341,6 @@ class MitsubaLoader {
     std::vector<pugi::xml_node> nested;
     MitsubaProperties props(doc_, node, &nested);
     BsdfDescription b;
-    b.id = node.attribute("id").as_string();
     std::string what = "bsdf type '" + type + "'";
     if (type == "twosided") {
       if (nested.size() != 1)
@@ -372,6 +372,7 @@ class MitsubaLoader {
     }
     // Textured parameters: <texture name="reflectance" ...> or <ref name="reflectance" id=.../>.
     // Only a diffuse reflectance may be textured.
+    int texture = -1;
     const char* texturable = type == "diffuse"                               ? "reflectance"
                              : (type == "plastic" || type == "roughplastic") ? "diffuseReflectance"
                                                                              : nullptr;
@@ -385,41 +386,39 @@ class MitsubaLoader {
         doc_.fail(child,
                   "a textured '" + name + "' is not supported for " + what +
                       (texturable ? std::string(" (only its ") + texturable + " may be)" : ""));
-      if (props.has(name.c_str()) || b.reflectanceTexture >= 0)
+      if (props.has(name.c_str()) || texture >= 0)
         doc_.fail(child, "parameter '" + name + "' given twice");
-      b.reflectanceTexture = tag == "ref" ? doc_.resolveRef(child, "texture") : parseTexture(child);
+      texture = tag == "ref" ? doc_.resolveRef(child, "texture") : parseTexture(child);
     }
     if (type == "diffuse") {
-      b.type = BsdfDescription::Type::Diffuse;
-      b.reflectance = props.getSpectrum("reflectance", Spectrum(0.5f));
+      b = diffuseMaterial(props.getSpectrum("reflectance", Spectrum(0.5f)), texture);
     } else if (type == "dielectric") {
-      b.type = BsdfDescription::Type::Dielectric;
-      parseDielectricIndex(props, &b, "dielectric");
+      const auto [intIOR, extIOR] = parseDielectricIndex(props, "dielectric");
+      b = dielectricMaterial(intIOR, extIOR, {});
     } else if (type == "conductor") {
-      b.type = BsdfDescription::Type::Conductor;
-      parseConductorIndex(props, &b);
+      b = parseConductor(props, {});
     } else if (type == "roughconductor") {
-      b.type = BsdfDescription::Type::RoughConductor;
-      parseRoughness(node, props, &b);
-      parseConductorIndex(props, &b);
+      const Roughness roughness = parseRoughness(node, props);
+      b = parseConductor(props, roughness);
     } else if (type == "roughdielectric") {
-      b.type = BsdfDescription::Type::RoughDielectric;
-      parseRoughness(node, props, &b);
-      parseDielectricIndex(props, &b, "roughdielectric");
+      const Roughness roughness = parseRoughness(node, props);
+      const auto [intIOR, extIOR] = parseDielectricIndex(props, "roughdielectric");
       // Equal indices refract nothing: every refraction goes straight through, where the
       // microfacet transmission lobe is singular (its Jacobian's denominator vanishes).
-      if (b.intIOR == b.extIOR)
+      if (intIOR == extIOR)
         doc_.fail(
             node,
             "roughdielectric with intIOR equal to extIOR does not refract; leave the surface out");
+      b = dielectricMaterial(intIOR, extIOR, roughness);
     } else if (type == "plastic" || type == "roughplastic") {
-      parseCoatedDiffuse(node, props, type, &b);
+      b = parseCoatedDiffuse(node, props, type, texture);
     } else {
       doc_.fail(node,
                 "unknown or unsupported bsdf type '" + type +
                     "' (supported: diffuse, twosided, dielectric, roughdielectric, conductor, "
                     "roughconductor, plastic, roughplastic)");
     }
+    b.id = node.attribute("id").as_string();
     props.rejectUnused(what);
     return b;
   }
@@ -513,11 +512,12 @@ class MitsubaLoader {
   void parsePointEmitter(const pugi::xml_node& node, const std::string& type) {
     MitsubaProperties props(doc_, node, nullptr);
     props.take("samplingWeight");
-    PointLightDescription light;
-    light.intensity = props.getSpectrum("intensity", Spectrum(1.0f));
+    const Spectrum intensity = props.getSpectrum("intensity", Spectrum(1.0f));
     Matrix4 toWorld = Matrix4::identity();
     if (pugi::xml_node t = props.take("toWorld")) toWorld = doc_.transformOf(t);
-    light.position = toWorld.applyPoint(props.getPoint("position", Vec3f(0.0f)));
+    PointLightDescription light =
+        pointLight(toWorld.applyPoint(props.getPoint("position", Vec3f(0.0f))), intensity,
+                   doc_.origin(node) + " (" + type + ")");
     if (type == "spot") {
       const double cutoff = props.getNumber("cutoffAngle", 20);
       const double beam = props.getNumber("beamWidth", cutoff * 3 / 4);
@@ -527,15 +527,10 @@ class MitsubaLoader {
         doc_.fail(node, "spot beamWidth must be in [0, cutoffAngle]");
       const Vec3f axis = toWorld.applyVector(Vec3f(0, 0, 1));
       if (!(length(axis) > 0) || !isFinite(axis)) doc_.fail(node, "spot toWorld is singular");
-      light.spot = true;
-      light.direction = normalize(axis);
-      light.cosTotalWidth = float(std::cos(cutoff * M_PI / 180));
-      light.cosFalloffStart = float(std::cos(beam * M_PI / 180));
-      light.falloff = PointLightDescription::Falloff::MitsubaLinearAngle;
+      aimSpot(&light, axis, cutoff, beam, PointLightDescription::Falloff::MitsubaLinearAngle);
     }
     props.rejectUnused("emitter type '" + type + "'");
     if (!isFinite(light.position)) doc_.fail(node, type + " emitter: its position is not finite");
-    light.origin = doc_.origin(node) + " (" + type + ")";
     scene_.pointLights.push_back(light);
   }
 

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "common/scene/loaders/image_reader.h"
+#include "common/scene/loaders/light_builders.h"
+#include "common/scene/loaders/material_builders.h"
 #include "common/scene/loaders/pbrt_parser.h"
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/vdb_reader.h"
@@ -22,31 +24,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kDiskSegments = 1024;  // area deficit (2 pi / n)^2 / 6 = 6e-6 of the disk's
-
-// Complex indices of refraction of pbrt-v4's named metal spectra ("metal-Au-eta"), as RGB:
-// the spectral data integrated to linear sRGB (the table Tungsten ships; CuZn, absent there,
-// is the brass of Mitsuba's documentation).
-struct NamedMetal {
-  const char* name;
-  Spectrum eta, k;
-};
-const NamedMetal kNamedMetals[] = {
-    {"Ag",
-     {0.1552646489f, 0.1167232965f, 0.1383806959f},
-     {4.8283433224f, 3.1222459278f, 2.1469504455f}},
-    {"Al",
-     {1.6574599595f, 0.8803689579f, 0.5212287346f},
-     {9.2238691996f, 6.2695232477f, 4.8370012281f}},
-    {"Au",
-     {0.1431189557f, 0.3749570432f, 1.4424785571f},
-     {3.9831604247f, 2.3857207478f, 1.6032152899f}},
-    {"Cu",
-     {0.2004376970f, 0.9240334304f, 1.1022119527f},
-     {3.9129485033f, 2.4528477015f, 2.1421879552f}},
-    {"CuZn", {0.444f, 0.527f, 1.094f}, {3.695f, 2.765f, 1.829f}},
-    {"MgO", {2.0895885542f, 1.6507224525f, 1.5948759692f}, {0.0f, 0.0f, 0.0f}},
-    {"TiO2", {3.4566203131f, 2.8017076558f, 2.9051485020f}, {0.0001026662f, 0.0f, 0.0006356902f}},
-};
 
 std::string formatNumber(double v) {
   std::ostringstream out;
@@ -168,7 +145,7 @@ class PbrtLoader : public PbrtTarget {
     if (p->type == "spectrum") {
       if (p->strings.size() == 1) {
         const std::string& s = p->strings[0];
-        for (const NamedMetal& m : kNamedMetals) {
+        for (const MetalIndex& m : pbrtNamedMetals()) {
           const std::string prefix = std::string("metal-") + m.name + "-";
           if (s == prefix + "eta") return *out = m.eta, true;
           if (s == prefix + "k") return *out = m.k, true;
@@ -728,12 +705,13 @@ class PbrtLoader : public PbrtTarget {
     return eta->numbers[0];
   }
 
-  // A diffuse reflectance, which may be a texture (`def` where the material does not give it).
-  void readReflectance(PbrtDirective& d, const std::string& name, float def, BsdfDescription* b) {
-    b->reflectance = Spectrum(def);
+  // A diffuse reflectance, which may be a texture (`def` where the material does not give it):
+  // diffuseMaterial's.
+  BsdfDescription readDiffuse(PbrtDirective& d, const std::string& name, float def) {
+    Spectrum reflectance(def);
     int texture = -1;
-    getSpectrum(d, name, &b->reflectance, &texture);
-    b->reflectanceTexture = texture;
+    getSpectrum(d, name, &reflectance, &texture);
+    return diffuseMaterial(reflectance, texture);
   }
 
   int makeMaterial(PbrtDirective& d, const std::string& type) {
@@ -750,36 +728,24 @@ class PbrtLoader : public PbrtTarget {
         d.failParam(*d.find(bump), what + ": bump and displacement maps are not supported");
     BsdfDescription b;
     if (type == "matte" || type == "diffuse") {
-      b.type = BsdfDescription::Type::Diffuse;
-      b.twoSided = true;  // pbrt's BSDFs scatter on both sides of a surface
-      readReflectance(d, type == "matte" ? "Kd" : "reflectance", 0.5f, &b);
+      b = readDiffuse(d, type == "matte" ? "Kd" : "reflectance", 0.5f);
       if (type == "matte" && d.getFloat("sigma", 0) != 0)
         d.fail("Oren-Nayar matte (sigma > 0) is not supported");
     } else if (type == "metal" || type == "conductor") {
       const bool v4 = type == "conductor";
       if (v4 && d.has("reflectance"))
         d.fail("conductor given by reflectance is not supported: give eta and k");
-      b.eta = kNamedMetals[3].eta;  // copper, both versions' default
-      b.k = kNamedMetals[3].k;
-      getSpectrum(d, "eta", &b.eta);
-      getSpectrum(d, "k", &b.k);
-      double alpha = roughness(d, v4, v4 ? 0.0 : 0.01, !v4);
-      b.twoSided = true;
-      b.extEta = 1.0f;
-      if (alpha > 0) {
-        b.type = BsdfDescription::Type::RoughConductor;
-        b.distribution = MicrofacetDistribution::GGX;  // pbrt's Trowbridge-Reitz
-        b.alpha = float(alpha);
-      } else {
-        b.type = BsdfDescription::Type::Conductor;
-      }
+      const MetalIndex& copper = *pbrtNamedMetal("Cu");  // both versions' default
+      Spectrum eta = copper.eta, k = copper.k;
+      getSpectrum(d, "eta", &eta);
+      getSpectrum(d, "k", &k);
+      const double alpha = roughness(d, v4, v4 ? 0.0 : 0.01, !v4);
+      b = conductorMaterial(eta, k, 1.0f, Spectrum(1.0f), {float(alpha)});
     } else if (type == "mirror") {
-      b.type = BsdfDescription::Type::Conductor;
-      b.twoSided = true;
-      b.eta = Spectrum(0.0f);  // eta 0 + 1i reflects everything; Kr scales it
-      b.k = Spectrum(1.0f);
-      b.specularReflectance = Spectrum(0.9f);
-      getSpectrum(d, "Kr", &b.specularReflectance);
+      Spectrum kr(0.9f);
+      getSpectrum(d, "Kr", &kr);
+      // eta 0 + 1i reflects everything; Kr scales it
+      b = conductorMaterial(Spectrum(0.0f), Spectrum(1.0f), 1.0f, kr, {});
     } else if (type == "glass" || type == "dielectric") {
       const bool v4 = type == "dielectric";
       PbrtParam* etaParam = d.find(v4 ? "eta" : "index");
@@ -793,44 +759,26 @@ class PbrtLoader : public PbrtTarget {
         auto one = [](const Spectrum& v) { return v.x == 1 && v.y == 1 && v.z == 1; };
         if (!one(kr) || !one(kt)) d.fail("tinted glass (Kr or Kt other than 1) is not supported");
       }
-      double alpha = roughness(d, v4, 0.0);
-      b.intIOR = float(eta);
-      b.extIOR = 1.0f;
+      const double alpha = roughness(d, v4, 0.0);
       if (eta == 1) d.fail("glass of index 1 does not refract; leave the surface out");
-      if (alpha > 0) {
-        b.type = BsdfDescription::Type::RoughDielectric;
-        b.distribution = MicrofacetDistribution::GGX;
-        b.alpha = float(alpha);
-      } else {
-        b.type = BsdfDescription::Type::Dielectric;
-      }
-    } else if (type == "" || type == "none" || type == "interface") {
-      d.fail("material '" + type + "' (a boundary of media only) is not supported");
+      b = dielectricMaterial(float(eta), 1.0f, {float(alpha)});
     } else if (type == "plastic") {
-      // pbrt-v3's plastic: Lambertian Kd plus a Trowbridge-Reitz lobe Ks with a dielectric's
-      // Fresnel term. pbrt-v3 takes that term from inside the coating (index 1.5 to 1, total
-      // reflection beyond 42 degrees); the farm takes the physical one, from the air.
-      b.type = BsdfDescription::Type::Plastic;
-      b.twoSided = true;
-      readReflectance(d, "Kd", 0.25f, &b);
-      b.specularReflectance = Spectrum(0.25f);
-      getSpectrum(d, "Ks", &b.specularReflectance);
-      double alpha = roughness(d, false, 0.1, true);
+      // pbrt-v3's plastic. pbrt-v3 takes its Fresnel term from inside the coating (index 1.5 to
+      // 1, total reflection beyond 42 degrees); the farm takes the physical one, from the air.
+      b = readDiffuse(d, "Kd", 0.25f);
+      Spectrum ks(0.25f);
+      getSpectrum(d, "Ks", &ks);
+      const double alpha = roughness(d, false, 0.1, true);
       if (!(alpha > 0)) d.fail("plastic of roughness 0 (without remapping) is not supported");
-      b.alpha = float(alpha);
-      b.distribution = MicrofacetDistribution::GGX;
-      b.intIOR = 1.5f;
-      b.extIOR = 1.0f;
+      b = plasticMaterial(b.reflectance, b.reflectanceTexture, ks, {float(alpha)}, 1.5f, 1.0f);
       warn(d,
            "plastic: its glossy lobe's Fresnel term is a dielectric's seen from the air (pbrt-v3 "
            "computes it from inside the coating, which reflects totally beyond 42 degrees)");
     } else if (type == "coateddiffuse") {
-      // pbrt-v4's coateddiffuse: a dielectric coat over a Lambertian base, which pbrt evaluates
-      // by a random walk between the two; here in closed form (bsdfs/coated_diffuse.h, with the
-      // base's inter-reflections summed as their series, as the walk does).
-      b.type = BsdfDescription::Type::CoatedDiffuse;
-      b.twoSided = true;
-      readReflectance(d, "reflectance", 0.5f, &b);
+      // pbrt-v4's coateddiffuse, which pbrt evaluates by a random walk between the coat and the
+      // base; here in closed form (bsdfs/coated_diffuse.h, with the base's inter-reflections
+      // summed as their series, as the walk does).
+      const BsdfDescription base = readDiffuse(d, "reflectance", 0.5f);
       const double eta = scalarIndex(d, d.find("eta"), 1.5);
       if (!(eta > 0) || eta > 100 || eta == 1)
         d.fail(what + ": the coat's index of refraction must be in (0, 100] and not 1");
@@ -843,13 +791,8 @@ class PbrtLoader : public PbrtTarget {
       const double thickness = d.getFloat("thickness", 0.01);
       if (!(thickness >= 0)) d.fail(what + ": thickness must be >= 0");
       const double alpha = roughness(d, true, 0.0);
-      b.distribution = MicrofacetDistribution::GGX;
-      b.alpha = alpha > 0 ? float(alpha) : 1e-4f;
-      b.intIOR = float(eta);
-      b.extIOR = 1.0f;
-      b.nonlinear = true;
-      b.specularReflectance = Spectrum(1.0f);
-      finishCoatedDiffuse(d.file, d.line, what, &b);
+      b = coatedDiffuseMaterial(base.reflectance, base.reflectanceTexture, Spectrum(1.0f),
+                                {float(alpha)}, float(eta), 1.0f, true, d.file, d.line, what);
       warn(d, what +
                   ": rendered in closed form, not by pbrt-v4's random walk; its layer absorbs "
                   "nothing here (pbrt's, of thickness " +
@@ -860,6 +803,9 @@ class PbrtLoader : public PbrtTarget {
              " is not supported (matte/diffuse, metal/conductor, mirror, glass/dielectric, "
              "plastic, coateddiffuse)");
     }
+    // pbrt's BSDFs scatter on both sides of a surface; a dielectric has two sides by nature.
+    b.twoSided = b.type != BsdfDescription::Type::Dielectric &&
+                 b.type != BsdfDescription::Type::RoughDielectric;
     d.getString("type", "");  // MakeNamedMaterial's, read already
     d.rejectUnused(what);
     scene_.bsdfs.push_back(b);
@@ -915,14 +861,14 @@ class PbrtLoader : public PbrtTarget {
   void parsePointLight(PbrtDirective& d) {
     const std::string& type = d.strings[0];
     if (inObject_) d.fail("a light source inside an object definition");
-    PointLightDescription light;
     Spectrum I(1.0f), scale(1.0f);
     getSpectrum(d, "I", &I);
     getSpectrum(d, "scale", &scale);
     if (d.has("power")) d.fail(type + " light 'power' is not supported: give I");
     const Vec3f from = getPoint(d, "from", Vec3f(0.0f));
-    light.position = attrs_.ctm.applyPoint(from);
-    light.intensity = I * scale;
+    PointLightDescription light = pointLight(
+        attrs_.ctm.applyPoint(from), I * scale,
+        fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type + ")");
     if (type == "spot") {
       const Vec3f to = getPoint(d, "to", Vec3f(0, 0, 1));
       const double cone = d.getFloat("coneangle", 30);
@@ -932,16 +878,11 @@ class PbrtLoader : public PbrtTarget {
       if (!(delta >= 0 && delta <= cone)) d.fail("spot cone delta must be in [0, coneangle]");
       const Vec3f axis = attrs_.ctm.applyVector(to - from);
       if (!(length(axis) > 0) || !isFinite(axis)) d.fail("spot: \"from\" and \"to\" coincide");
-      light.spot = true;
-      light.direction = normalize(axis);
-      light.cosTotalWidth = float(std::cos(cone * M_PI / 180));
-      light.cosFalloffStart = float(std::cos((cone - delta) * M_PI / 180));
-      light.falloff = PointLightDescription::Falloff::PbrtV3Quartic;  // v4's: at the end
+      // v3's falloff; v4's at the end, when the file has shown its version
+      aimSpot(&light, axis, cone, cone - delta, PointLightDescription::Falloff::PbrtV3Quartic);
     }
     d.rejectUnused(type + " light");
     if (!isFinite(light.position)) d.fail(type + " light: its position is not finite");
-    light.origin =
-        fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type + ")";
     scene_.pointLights.push_back(light);
   }
 

@@ -7,7 +7,6 @@
 #include <fstream>
 #include <sstream>
 
-#include "common/scene/bsdfs/coating_transmittance.h"
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/mesh_cleanup.h"
 
@@ -167,63 +166,6 @@ double determinant3(const Matrix4& t) {
   return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
          m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
          m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-}
-
-}  // namespace farm
-
-namespace farm {
-
-void finishCoatedDiffuse(const std::string& file, int line, const std::string& what,
-                         BsdfDescription* b) {
-  for (const Spectrum* v : {&b->reflectance, &b->specularReflectance})
-    if (v->x > 1 || v->y > 1 || v->z > 1)
-      throw SceneLoadError(file, line, what + ": a reflectance above 1 would create energy");
-  if (b->intIOR == b->extIOR)
-    throw SceneLoadError(file, line,
-                         what +
-                             ": intIOR and extIOR must differ (the coat's index and the "
-                             "outside's)");
-  b->coating = sharedCoatingTransmittance(b->distribution, b->alpha, b->intIOR / b->extIOR);
-}
-
-EnvironmentDescription makeEnvironment(const fs::path& dir, const std::string& file, int line,
-                                       const Spectrum& scale, const Matrix4& lightToWorld,
-                                       const std::string& filename, bool equalAreaAllowed) {
-  EnvironmentDescription e;
-  e.present = true;
-  e.origin = fs::path(file).filename().string() + ":" + std::to_string(line) + " (environment" +
-             (filename.empty() ? "" : " " + filename) + ")";
-  if (!isFinite(scale) || !(scale.x >= 0 && scale.y >= 0 && scale.z >= 0))
-    throw SceneLoadError(file, line, "environment radiance must be finite and >= 0");
-  e.scale = scale;
-  double unused;
-  if (!lightToWorld.isFinite() || similarityOf(lightToWorld, &unused) != Similarity::Uniform)
-    throw SceneLoadError(file, line,
-                         "the environment's transformation must be a rotation (a non-uniform "
-                         "scale or a shear would distort its directions)");
-  e.toWorld = lightToWorld;
-  if (filename.empty()) return e;
-  const fs::path path = sceneFilePath(dir, filename, "environment map", file, line);
-  const std::string bytes = readSceneFile(path, "environment map '" + filename + "'", file, line);
-  std::shared_ptr<TextureImage> image;
-  try {
-    image = readTextureImage(bytes, filename, TextureEncoding::Automatic);
-  } catch (const std::exception& x) {
-    throw SceneLoadError(file, line, "cannot read environment map '" + filename + "': " + x.what());
-  }
-  if (equalAreaAllowed && image->width == image->height) {
-    e.mapping = EnvironmentDescription::Mapping::EqualArea;
-  } else if (image->width != 2 * image->height) {
-    throw SceneLoadError(file, line,
-                         "environment map '" + filename + "' is " + std::to_string(image->width) +
-                             "x" + std::to_string(image->height) +
-                             (equalAreaAllowed ? ": it must be a square equal-area map (pbrt-v4) "
-                                                 "or a lat-long map twice as wide as high"
-                                               : ": it must be a lat-long map, twice as wide as "
-                                                 "high"));
-  }
-  e.image = std::move(image);
-  return e;
 }
 
 }  // namespace farm

@@ -88,19 +88,4 @@ double determinant3(const Matrix4& t);
 enum class Similarity { Uniform, NonUniformScale, Shear };
 Similarity similarityOf(const Matrix4& t, double* scale);
 
-// The last step of both loaders' coated diffuse (bsdfs/coated_diffuse.h, `what` naming it for
-// messages): reflectances above 1 and equal indices of refraction are SceneLoadErrors at
-// file:line; then the coat's table, shared with identical coats.
-void finishCoatedDiffuse(const std::string& file, int line, const std::string& what,
-                         BsdfDescription* b);
-
-// An environment light as both loaders describe it (see EnvironmentDescription): `lightToWorld`
-// in pbrt's frame (z up) must be a rotation, possibly mirrored and uniformly scaled; `filename`
-// (in the scene's folder `dir`; empty for a constant) a lat-long map, twice as wide as high, or
-// where equalAreaAllowed (pbrt-v4's "filename") a square equal-area one. Errors are
-// SceneLoadErrors at file:line.
-EnvironmentDescription makeEnvironment(const std::filesystem::path& dir, const std::string& file,
-                                       int line, const Spectrum& scale, const Matrix4& lightToWorld,
-                                       const std::string& filename, bool equalAreaAllowed);
-
 }  // namespace farm

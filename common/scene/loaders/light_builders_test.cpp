@@ -1,7 +1,9 @@
-// Lights other than area lights from both formats. Environments: Mitsuba's constant and envmap
-// (y up, u = atan2(x, -z) / 2 pi) and pbrt's infinite (z up, u = atan2(y, x) / 2 pi; v3's
+// Lights from both formats (light_builders.h, its table). Environments: Mitsuba's constant and
+// envmap (y up, u = atan2(x, -z) / 2 pi) and pbrt's infinite (z up, u = atan2(y, x) / 2 pi; v3's
 // "mapname", v4's "filename"), each texel of a map found where its format puts it. Point and
 // spot lights: position, intensity, axis, cone and each format's falloff. And their errors.
+#include "common/scene/loaders/light_builders.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 #include "common/film/image.h"
 #include "common/sampling/warp.h"
 #include "common/scene/environment_light.h"
-#include "common/scene/loaders/scene_files.h"
 #include "common/scene/loaders/scene_loader.h"
 #include "common/scene/loaders/temp_dir_for_tests.h"
 
