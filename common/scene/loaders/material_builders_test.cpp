@@ -9,12 +9,6 @@
 namespace farm {
 namespace {
 
-void expectSameSpectrum(const Spectrum& a, const Spectrum& b, const std::string& what) {
-  EXPECT_EQ(a.x, b.x) << what;
-  EXPECT_EQ(a.y, b.y) << what;
-  EXPECT_EQ(a.z, b.z) << what;
-}
-
 // Every field a model reads; the coat's table by identity (identical coats share one).
 void expectSameMaterial(const BsdfDescription& a, const BsdfDescription& b) {
   EXPECT_EQ(a.type, b.type);

@@ -13,9 +13,11 @@
 #include <utility>
 #include <vector>
 
+#include "common/scene/loaders/camera_builders.h"
 #include "common/scene/loaders/grid_volume_reader.h"
 #include "common/scene/loaders/light_builders.h"
 #include "common/scene/loaders/material_builders.h"
+#include "common/scene/loaders/medium_builders.h"
 #include "common/scene/loaders/mitsuba_document.h"
 #include "common/scene/loaders/mitsuba_properties.h"
 #include "common/scene/loaders/ply_reader.h"
@@ -191,14 +193,13 @@ class MitsubaLoader {
     pugi::xml_node widthNode = props.take("width"), heightNode = props.take("height");
     if (widthNode) width = doc_.integer(widthNode, "width");
     if (heightNode) height = doc_.integer(heightNode, "height");
-    constexpr long long kMaxSide = 65536, kMaxPixels = 1LL << 28;
-    if (width < 1 || width > kMaxSide)
+    if (width < 1 || width > kMaxFilmSide)
       doc_.fail(widthNode ? widthNode : node,
                 "film width " + std::to_string(width) + " is not in [1, 65536]");
-    if (height < 1 || height > kMaxSide)
+    if (height < 1 || height > kMaxFilmSide)
       doc_.fail(heightNode ? heightNode : node,
                 "film height " + std::to_string(height) + " is not in [1, 65536]");
-    if (width * height > kMaxPixels)
+    if (width * height > kMaxFilmPixels)
       doc_.fail(node, "film of " + std::to_string(width) + "x" + std::to_string(height) +
                           " pixels exceeds 2^28 pixels");
     cam.width = int(width);
@@ -230,9 +231,7 @@ class MitsubaLoader {
             doc_.fail(n, "stddev must be in [0.125, 4] pixels");
         }
         filterProps.rejectUnused("rfilter type 'gaussian'");
-        cam.filter = FilterType::Gaussian;
-        cam.filterRadius = float(4 * stddev);
-        cam.filterAlpha = float(1 / (2 * stddev * stddev));
+        setGaussianFilter(&cam, 4 * stddev, 1 / (2 * stddev * stddev));
       } else {
         doc_.fail(child, "unknown or unsupported reconstruction filter type '" + type +
                              "' (supported: tent, box, gaussian)");
@@ -619,14 +618,12 @@ class MitsubaLoader {
       if (extinction) {
         const Spectrum sigmaT = props.getSpectrum("sigmaT", Spectrum(1.0f));
         const Spectrum albedo = props.getSpectrum("albedo", Spectrum(1.0f));
-        m.sigmaS = sigmaT * albedo;
-        m.sigmaA = sigmaT - m.sigmaS;
+        setExtinction(&m, sigmaT, albedo, scale);
       } else {
-        m.sigmaA = props.getSpectrum("sigmaA", Spectrum(1.0f));
-        m.sigmaS = props.getSpectrum("sigmaS", Spectrum(1.0f));
+        const Spectrum sigmaA = props.getSpectrum("sigmaA", Spectrum(1.0f));
+        const Spectrum sigmaS = props.getSpectrum("sigmaS", Spectrum(1.0f));
+        setScattering(&m, sigmaA, sigmaS, scale);
       }
-      m.sigmaA *= float(scale);
-      m.sigmaS *= float(scale);
     } else {
       props.take("method");    // Woodcock tracking is what the farm does anyway
       props.take("stepSize");  // ray marching's step: the farm's estimators need none
@@ -635,8 +632,7 @@ class MitsubaLoader {
       if (albedoNode) albedo = constantVolume(albedoNode, "albedo");
       const float constant = parseDensityVolume(densityNode, &m);
       // Mitsuba: sigma_t = scale * density, sigma_s = sigma_t * albedo.
-      m.sigmaS = albedo * float(scale * constant);
-      m.sigmaA = Spectrum(float(scale * constant)) - m.sigmaS;
+      setExtinction(&m, Spectrum(float(scale * constant)), albedo, 1.0);
     }
     props.rejectUnused("medium type '" + type + "'");
     const std::string problem = mediumProblem(m);

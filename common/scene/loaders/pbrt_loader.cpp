@@ -9,9 +9,11 @@
 #include <utility>
 #include <vector>
 
+#include "common/scene/loaders/camera_builders.h"
 #include "common/scene/loaders/image_reader.h"
 #include "common/scene/loaders/light_builders.h"
 #include "common/scene/loaders/material_builders.h"
+#include "common/scene/loaders/medium_builders.h"
 #include "common/scene/loaders/pbrt_parser.h"
 #include "common/scene/loaders/ply_reader.h"
 #include "common/scene/loaders/vdb_reader.h"
@@ -86,7 +88,7 @@ class PbrtLoader : public PbrtTarget {
     scene_.maxDepth = 6;
     parsePbrt(path_, text, this);
     // pbrt-v4's default filter is a gaussian of radius 1.5 and sigma 0.5; v3's a box.
-    if (sawV4_ && (!sawFilter_ || gaussianDefaults_)) setGaussian(1.5, 2);
+    if (sawV4_ && (!sawFilter_ || gaussianDefaults_)) setGaussianFilter(&scene_.camera, 1.5, 2);
     // pbrt-v4's spots fall off by a smoothstep, v3's by the fourth power.
     if (sawV4_) {
       for (PointLightDescription& l : scene_.pointLights)
@@ -412,10 +414,10 @@ class PbrtLoader : public PbrtTarget {
     if (type != "image" && type != "rgb" && type != "gbuffer")
       d.fail("film '" + type + "' is not supported (image, rgb)");
     long long w = d.getInt("xresolution", 1280), h = d.getInt("yresolution", 720);
-    if (w < 1 || h < 1 || w > 65536 || h > 65536)
+    if (w < 1 || h < 1 || w > kMaxFilmSide || h > kMaxFilmSide)
       d.fail("film resolution " + std::to_string(w) + "x" + std::to_string(h) +
              " is outside 1..65536");
-    if (w * h > (1ll << 28)) d.fail("film of more than 2^28 pixels");
+    if (w * h > kMaxFilmPixels) d.fail("film of more than 2^28 pixels");
     d.getString("filename", "");  // the farm names its own output
     d.rejectUnused("Film");
     scene_.camera.width = int(w);
@@ -458,18 +460,12 @@ class PbrtLoader : public PbrtTarget {
         alpha = 1 / (2 * sigma * sigma);
       }
       if (!(alpha >= 0.01 && alpha <= 100)) d.fail("gaussian alpha must be in [0.01, 100]");
-      setGaussian(rx, alpha);
+      setGaussianFilter(&scene_.camera, rx, alpha);
     } else {
       d.fail("pixel filter '" + type +
              "' is not supported (box of radius 0.5, triangle of radius 1, gaussian)");
     }
     d.rejectUnused("PixelFilter");
-  }
-
-  void setGaussian(double radius, double alpha) {
-    scene_.camera.filter = FilterType::Gaussian;
-    scene_.camera.filterRadius = float(radius);
-    scene_.camera.filterAlpha = float(alpha);
   }
 
   void parseIntegrator(PbrtDirective& d) {
@@ -950,14 +946,14 @@ class PbrtLoader : public PbrtTarget {
     m.id = d.strings[0];
     m.origin = fs::path(d.file).filename().string() + ":" + std::to_string(d.line) + " (" + type +
                " '" + d.strings[0] + "')";
-    if (!getSpectrum(d, "sigma_a", &m.sigmaA) || !getSpectrum(d, "sigma_s", &m.sigmaS))
+    Spectrum sigmaA, sigmaS;
+    if (!getSpectrum(d, "sigma_a", &sigmaA) || !getSpectrum(d, "sigma_s", &sigmaS))
       d.fail(what +
              " needs \"rgb sigma_a\" and \"rgb sigma_s\" (pbrt-v3 and v4 default "
              "them differently)");
     const double scale = d.getFloat("scale", 1);
     if (!(scale >= 0) || !std::isfinite(scale)) d.fail(what + ": scale must be >= 0");
-    m.sigmaA *= float(scale);
-    m.sigmaS *= float(scale);
+    setScattering(&m, sigmaA, sigmaS, scale);
     m.g = float(d.getFloat("g", 0));
     if (type == "nanovdb") {
       const std::string filename = d.getString("filename", "");

@@ -77,4 +77,11 @@ inline void expectLoadError(const std::string& path, const std::string& message,
   }
 }
 
+// That two spectra are the same, bit for bit (`what` names them).
+inline void expectSameSpectrum(const Spectrum& a, const Spectrum& b, const std::string& what) {
+  EXPECT_EQ(a.x, b.x) << what;
+  EXPECT_EQ(a.y, b.y) << what;
+  EXPECT_EQ(a.z, b.z) << what;
+}
+
 }  // namespace farm
